@@ -1,0 +1,78 @@
+#pragma once
+// What a participant program implements. The participant runtime (participant.hpp) owns the socket,
+// the handshake, heartbeats and error replies; a Solver only does physics.
+#include <atomic>
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "sphfsi/protocol/arrays.hpp"
+#include "sphfsi/protocol/schema.hpp"
+#include "sphfsi/protocol/value.hpp"
+
+namespace sphfsi::protocol {
+
+// A solver failure that ends the run: blow-up, non-convergence, bad configuration. `code` is one of the
+// error codes of docs/protocol.md ("diverged", "not_converged", "bad_config", "internal").
+class SolverError : public std::runtime_error {
+public:
+    SolverError(std::string code, const std::string& message) : std::runtime_error(message), code_(std::move(code)) {}
+    const std::string& code() const { return code_; }
+
+private:
+    std::string code_;
+};
+
+struct InitRequest {
+    Value config;                          // the participant's scene section, validated, defaults filled
+    double t0 = 0.0;                       // start time [s]
+    std::optional<InterfaceMesh> interface;  // fluid: the structure's interface mesh when coupled
+    std::vector<std::uint8_t> state;       // non-empty: resume from this checkpoint (from checkpoint())
+};
+
+struct InitReply {
+    double dt_wanted = 0.0;                // largest step the solver wants next [s]
+    std::optional<InterfaceMesh> interface;  // structure: the interface mesh it publishes
+    Value info;                            // a table of facts for the record (particle count, ...)
+};
+
+struct AdvanceRequest {
+    double t = 0.0;              // window start [s]; equals the solver's current time
+    double dt = 0.0;             // window length [s]
+    std::uint32_t substeps = 0;  // equal sub-steps to take; 0 = the solver chooses (adaptive)
+    std::uint32_t iteration = 0; // implicit coupling iteration within this window (0 = first)
+    Fields inputs;               // structure: "force"; fluid: "displacement", "velocity" (window end)
+};
+
+struct AdvanceReply {
+    double t = 0.0;                       // time reached [s] (== request t + dt)
+    double dt_wanted = 0.0;               // largest step the solver wants next [s]
+    Fields outputs;                       // structure: "displacement", "velocity"; fluid: "force"
+    std::uint32_t substeps = 0;           // sub-steps actually taken
+    std::uint32_t solver_iterations = 0;  // e.g. Newton or PCISPH iterations summed over sub-steps
+    Value stats;                          // a table of extra per-window numbers for the record
+    double compute_s = 0.0;               // wall seconds inside Solver::advance (set by the runtime)
+};
+
+// Progress counter the heartbeat thread reports; a solver bumps it once per sub-step.
+struct Progress {
+    std::atomic<std::uint64_t> steps{0};
+    void tick() { steps.fetch_add(1, std::memory_order_relaxed); }
+};
+
+class Solver {
+public:
+    virtual ~Solver() = default;
+    virtual std::string kind() const = 0;  // "fluid" or "structure"
+    virtual const schema::TableSchema& schema() const = 0;
+    virtual InitReply init(const InitRequest& request) = 0;
+    virtual AdvanceReply advance(const AdvanceRequest& request, Progress& progress) = 0;
+    virtual void save() = 0;     // remember the current state (implicit coupling window start)
+    virtual void restore() = 0;  // go back to the saved state
+    virtual Fields snapshot() = 0;                   // fields for a record frame
+    virtual std::vector<std::uint8_t> checkpoint() = 0;  // full state, opaque, for resume
+};
+
+}  // namespace sphfsi::protocol

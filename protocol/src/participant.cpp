@@ -1,0 +1,287 @@
+#include "sphfsi/protocol/participant.hpp"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <condition_variable>
+#include <csignal>
+#include <cstdlib>
+#include <iostream>
+#include <mutex>
+#include <thread>
+#include <zmq.hpp>
+
+#include "sphfsi/protocol/codec.hpp"
+
+namespace sphfsi::protocol {
+namespace {
+using Clock = std::chrono::steady_clock;
+
+struct Options {
+    std::string endpoint, token, name;
+    double startup_timeout_s = 10.0;
+};
+
+volatile std::sig_atomic_t g_stop = 0;
+void on_signal(int) { g_stop = 1; }
+
+void usage(const std::string& prog, const std::string& kind) {
+    std::cerr << "usage: " << prog << " --connect tcp://HOST:PORT --name NAME [--token TOKEN] [--startup-timeout S]\n"
+              << "       " << prog << " --schema    (print the [" << kind << "] scene keys as markdown)\n"
+              << "A " << kind << " participant of sphfsi; normally started by the coordinator `sphfsi`.\n"
+              << "The token may also come from the environment variable SPHFSI_TOKEN.\n";
+}
+
+// One DEALER socket shared by the main thread and the heartbeat thread. ZeroMQ sockets are not
+// thread-safe, but may be used from several threads with a full memory barrier between uses: the
+// mutex gives that. The main thread never holds it for longer than one short poll.
+class Link {
+public:
+    Link(zmq::context_t& ctx, const std::string& endpoint) : socket_(ctx, zmq::socket_type::dealer) {
+        socket_.set(zmq::sockopt::linger, 0);
+        socket_.set(zmq::sockopt::maxmsgsize, static_cast<int64_t>(DecodeLimits{}.max_bytes));
+        socket_.connect(endpoint);
+    }
+    void send(const Message& m) {
+        std::string bytes = encode(m);
+        std::lock_guard lock(mutex_);
+        socket_.send(zmq::buffer(bytes), zmq::send_flags::none);
+    }
+    // Waits up to `ms` for one message; returns false on timeout.
+    bool receive(zmq::message_t& out, int ms) {
+        std::lock_guard lock(mutex_);
+        zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
+        if (zmq::poll(&item, 1, std::chrono::milliseconds(ms)) <= 0) return false;
+        return static_cast<bool>(socket_.recv(out, zmq::recv_flags::dontwait));
+    }
+
+private:
+    zmq::socket_t socket_;
+    std::mutex mutex_;
+};
+
+class Runtime {
+public:
+    Runtime(Options opt, std::unique_ptr<Solver> solver) : opt_(std::move(opt)), solver_(std::move(solver)) {}
+
+    int run() {
+        zmq::context_t ctx(1);
+        Link link(ctx, opt_.endpoint);
+        link_ = &link;
+        if (!handshake()) return 3;
+        std::thread beat([this] { heartbeat_loop(); });
+        int code = serve();
+        {
+            std::lock_guard lock(beat_mutex_);
+            stopping_ = true;
+        }
+        beat_cv_.notify_all();
+        beat.join();
+        return code;
+    }
+
+private:
+    void log(const std::string& what) const { std::cerr << "[" << opt_.name << "] " << what << std::endl; }
+
+    void reply(std::uint64_t seq, MessageType type, Body body = Empty{}) {
+        Message m = make_message(type, seq, opt_.token, std::move(body));
+        m.version = version_;
+        link_->send(m);
+    }
+    void reply_error(std::uint64_t seq, const std::string& code, const std::string& message) {
+        reply(seq, MessageType::Error, ErrorReply{code, message, seq});
+    }
+
+    bool handshake() {
+        Hello h{opt_.name, solver_->kind(), kOldestSupportedVersion, kProtocolVersion,
+                "sphfsi-" + solver_->kind() + " (protocol " + std::to_string(kProtocolVersion) + ")", ::getpid()};
+        Message hello = make_message(MessageType::Hello, 1, opt_.token, h);
+        hello.version = kProtocolVersion;
+        link_->send(hello);
+        auto deadline = Clock::now() + std::chrono::duration<double>(opt_.startup_timeout_s);
+        zmq::message_t raw;
+        while (Clock::now() < deadline && !g_stop) {
+            if (!link_->receive(raw, 100)) continue;
+            Message m;
+            try {
+                m = decode(raw.data(), raw.size());
+            } catch (const ProtocolError& e) {
+                log(std::string("refused a malformed answer to HELLO: ") + e.what());
+                continue;
+            }
+            if (m.type == MessageType::Error) {
+                const auto& e = m.as<ErrorReply>();
+                log("the coordinator refused us (" + e.code + "): " + e.message);
+                return false;
+            }
+            if (m.type != MessageType::Welcome) continue;
+            const auto& w = m.as<Welcome>();
+            version_ = w.version;
+            heartbeat_s_ = w.heartbeat_s;
+            timeout_s_ = w.timeout_s;
+            return true;
+        }
+        log("no WELCOME from " + opt_.endpoint + " within " + std::to_string(opt_.startup_timeout_s) + " s");
+        return false;
+    }
+
+    void heartbeat_loop() {
+        std::unique_lock lock(beat_mutex_);
+        std::uint64_t seq = 0;
+        while (!stopping_) {
+            beat_cv_.wait_for(lock, std::chrono::duration<double>(heartbeat_s_), [this] { return stopping_; });
+            if (stopping_) break;
+            Message m = make_message(MessageType::Heartbeat, ++seq, opt_.token, Heartbeat{progress_.steps.load()});
+            m.version = version_;
+            link_->send(m);
+        }
+    }
+
+    int serve() {
+        auto last_heard = Clock::now();
+        zmq::message_t raw;
+        while (true) {
+            if (g_stop) {
+                log("stopped by signal");
+                return 130;
+            }
+            if (!link_->receive(raw, 100)) {
+                double silent = std::chrono::duration<double>(Clock::now() - last_heard).count();
+                if (silent > timeout_s_) {
+                    log("the coordinator has been silent for " + std::to_string(silent) + " s; exiting");
+                    return 4;
+                }
+                continue;
+            }
+            last_heard = Clock::now();
+            Message m;
+            try {
+                m = decode(raw.data(), raw.size());
+            } catch (const ProtocolError& e) {
+                log(std::string("refused a malformed message: ") + e.what());
+                reply_error(0, e.code(), e.what());
+                continue;
+            }
+            if (m.token != opt_.token) {
+                reply_error(m.seq, "bad_token", "message carries a token that is not this run's");
+                continue;
+            }
+            if (m.type == MessageType::Heartbeat) continue;
+            if (m.type == MessageType::Bye) {
+                reply(m.seq, MessageType::Ack);
+                return 0;
+            }
+            handle(m);
+        }
+    }
+
+    void handle(const Message& m) {
+        try {
+            if (m.type != MessageType::Init && !initialised_)
+                return reply_error(m.seq, "bad_state", std::string(to_string(m.type)) + " before INIT");
+            switch (m.type) {
+                case MessageType::Init: {
+                    InitRequest req = m.as<InitRequest>();
+                    schema::Errors errors;
+                    req.config = solver_->schema().validate(req.config, solver_->kind(), errors);
+                    schema::throw_if_any(errors, "INIT config");
+                    InitReply r = solver_->init(req);
+                    initialised_ = true;
+                    last_t_ = saved_t_ = req.t0;
+                    return reply(m.seq, MessageType::Ready, std::move(r));
+                }
+                case MessageType::Advance: {
+                    auto start = Clock::now();
+                    AdvanceReply r = solver_->advance(m.as<AdvanceRequest>(), progress_);
+                    r.compute_s = std::chrono::duration<double>(Clock::now() - start).count();
+                    last_t_ = r.t;
+                    return reply(m.seq, MessageType::Advanced, std::move(r));
+                }
+                case MessageType::Save:
+                    solver_->save();
+                    saved_t_ = last_t_;
+                    return reply(m.seq, MessageType::Ack);
+                case MessageType::Restore:
+                    solver_->restore();
+                    last_t_ = saved_t_;
+                    return reply(m.seq, MessageType::Ack);
+                case MessageType::Snapshot: return reply(m.seq, MessageType::Frame, Frame{last_t_, solver_->snapshot()});
+                case MessageType::Checkpoint: return reply(m.seq, MessageType::State, State{last_t_, solver_->checkpoint()});
+                default:
+                    return reply_error(m.seq, "bad_state", std::string(to_string(m.type)) + " is not a request a participant answers");
+            }
+        } catch (const SolverError& e) {
+            log(std::string(e.code()) + ": " + e.what());
+            reply_error(m.seq, e.code(), e.what());
+        } catch (const ConfigError& e) {
+            log(std::string("bad_config: ") + e.what());
+            reply_error(m.seq, "bad_config", e.what());
+        } catch (const ProtocolError& e) {
+            reply_error(m.seq, e.code(), e.what());
+        } catch (const std::exception& e) {
+            log(std::string("internal error: ") + e.what());
+            reply_error(m.seq, "internal", e.what());
+        }
+    }
+
+    Options opt_;
+    std::unique_ptr<Solver> solver_;
+    Link* link_ = nullptr;
+    Progress progress_;
+    std::uint32_t version_ = kProtocolVersion;
+    double heartbeat_s_ = 0.5, timeout_s_ = 5.0;
+    double last_t_ = 0.0, saved_t_ = 0.0;  // time of the current and of the saved state
+    bool initialised_ = false;
+    std::mutex beat_mutex_;
+    std::condition_variable beat_cv_;
+    bool stopping_ = false;
+};
+}  // namespace
+
+int run_participant(int argc, char** argv, std::unique_ptr<Solver> solver) {
+    Options opt;
+    if (const char* t = std::getenv("SPHFSI_TOKEN")) opt.token = t;
+    const std::string prog = argc > 0 ? argv[0] : "participant";
+    for (int i = 1; i < argc; ++i) {
+        std::string a = argv[i];
+        auto next = [&]() -> std::string {
+            if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
+            return argv[++i];
+        };
+        try {
+            if (a == "--connect") opt.endpoint = next();
+            else if (a == "--token") opt.token = next();
+            else if (a == "--name") opt.name = next();
+            else if (a == "--startup-timeout") opt.startup_timeout_s = std::stod(next());
+            else if (a == "--schema") {
+                std::cout << solver->schema().document(solver->kind());
+                return 0;
+            } else if (a == "--help" || a == "-h") {
+                usage(prog, solver->kind());
+                return 0;
+            } else {
+                std::cerr << prog << ": unknown argument '" << a << "'\n";
+                usage(prog, solver->kind());
+                return 2;
+            }
+        } catch (const std::exception& e) {
+            std::cerr << prog << ": " << e.what() << "\n";
+            return 2;
+        }
+    }
+    if (opt.endpoint.empty() || opt.token.empty()) {
+        usage(prog, solver->kind());
+        return 2;
+    }
+    if (opt.name.empty()) opt.name = solver->kind();
+    std::signal(SIGTERM, on_signal);
+    std::signal(SIGINT, on_signal);
+    try {
+        return Runtime(std::move(opt), std::move(solver)).run();
+    } catch (const std::exception& e) {
+        std::cerr << prog << ": fatal: " << e.what() << "\n";
+        return 1;
+    }
+}
+
+}  // namespace sphfsi::protocol

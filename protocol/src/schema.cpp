@@ -1,0 +1,239 @@
+#include "sphfsi/protocol/schema.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace sphfsi::schema {
+namespace {
+std::string join(const std::string& path, const std::string& name) {
+    return path.empty() ? name : path + "." + name;
+}
+std::string fmt(double x) {
+    std::ostringstream s;
+    s << x;
+    return s.str();
+}
+std::string quoted_list(const std::vector<std::string>& xs) {
+    std::string out;
+    for (std::size_t i = 0; i < xs.size(); ++i) out += (i ? ", \"" : "\"") + xs[i] + "\"";
+    return out;
+}
+std::string describe(const Value& v) {
+    if (v.is_string()) return "\"" + v.as_string() + "\"";
+    if (v.is_int()) return std::to_string(v.as_int());
+    if (v.is_double()) return fmt(v.as_double());
+    if (v.is_bool()) return v.as_bool() ? "true" : "false";
+    return v.type_name();
+}
+}  // namespace
+
+void Errors::add(const Value* at, std::string message) {
+    if (at && at->line > 0) message = "line " + std::to_string(at->line) + ": " + message;
+    items.push_back(std::move(message));
+}
+
+Field::Field(std::string name, Kind kind, std::string doc)
+    : name_(std::move(name)), doc_(std::move(doc)), kind_(kind) {}
+
+std::string Field::allowed() const {
+    std::string range;
+    if (lo_) range += (lo_open_ ? "> " : ">= ") + fmt(*lo_);
+    if (hi_) range += (range.empty() ? "" : " and ") + std::string(hi_open_ ? "< " : "<= ") + fmt(*hi_);
+    std::string u = unit_.empty() ? "" : " (" + unit_ + ")";
+    switch (kind_) {
+        case Kind::Number: return "a number" + (range.empty() ? "" : " " + range) + u;
+        case Kind::Integer: return "an integer" + (range.empty() ? "" : " " + range) + u;
+        case Kind::Boolean: return "true or false";
+        case Kind::String: return "a string";
+        case Kind::Choice: return "one of " + quoted_list(choices_);
+        case Kind::Vector:
+            return (length_ ? "an array of " + std::to_string(length_) + " numbers" : std::string("an array of numbers")) +
+                   (range.empty() ? "" : ", each " + range) + u;
+        case Kind::Table: return "a table";
+        case Kind::TableArray: return "an array of tables ([[" + name_ + "]])";
+        case Kind::FreeTable: return "a table (checked by the participant)";
+    }
+    return "";
+}
+
+Value Field::validate(const Value& v, const std::string& path, Errors& errors) const {
+    auto bad = [&](const std::string& why) {
+        errors.add(&v, "key '" + path + "': " + why + "; allowed: " + allowed());
+        return v;
+    };
+    auto in_range = [&](double x) {
+        if (!std::isfinite(x)) return false;
+        if (lo_ && (lo_open_ ? !(x > *lo_) : !(x >= *lo_))) return false;
+        if (hi_ && (hi_open_ ? !(x < *hi_) : !(x <= *hi_))) return false;
+        return true;
+    };
+    switch (kind_) {
+        case Kind::Number:
+            if (!v.is_number()) return bad("got " + std::string(v.type_name()));
+            if (!in_range(v.as_double())) return bad("got " + describe(v));
+            return Value(v.as_double());  // ints are accepted where a float is wanted
+        case Kind::Integer:
+            if (!v.is_int()) return bad("got " + std::string(v.type_name()));
+            if (!in_range(static_cast<double>(v.as_int()))) return bad("got " + describe(v));
+            return v;
+        case Kind::Boolean:
+            if (!v.is_bool()) return bad("got " + std::string(v.type_name()));
+            return v;
+        case Kind::String:
+            if (!v.is_string()) return bad("got " + std::string(v.type_name()));
+            return v;
+        case Kind::Choice:
+            if (!v.is_string()) return bad("got " + std::string(v.type_name()));
+            for (const auto& c : choices_)
+                if (c == v.as_string()) return v;
+            return bad("got " + describe(v));
+        case Kind::Vector: {
+            if (!v.is_array()) return bad("got " + std::string(v.type_name()));
+            const auto& a = v.as_array();
+            if (length_ && a.size() != length_) return bad("got " + std::to_string(a.size()) + " entries");
+            Value::Array out;
+            for (const Value& x : a) {
+                if (!x.is_number()) return bad("an entry is " + std::string(x.type_name()));
+                if (!in_range(x.as_double())) return bad("an entry is " + describe(x));
+                out.emplace_back(x.as_double());
+            }
+            Value r(std::move(out));
+            r.line = v.line;
+            return r;
+        }
+        case Kind::Table:
+            if (!v.is_table()) return bad("got " + std::string(v.type_name()));
+            return table_->validate(v, path, errors);
+        case Kind::TableArray: {
+            if (!v.is_array()) return bad("got " + std::string(v.type_name()));
+            Value::Array out;
+            std::size_t i = 0;
+            for (const Value& x : v.as_array()) {
+                std::string p = path + "[" + std::to_string(i++) + "]";
+                if (!x.is_table()) {
+                    errors.add(&x, "key '" + p + "': got " + x.type_name() + "; allowed: a table");
+                    continue;
+                }
+                out.push_back(table_->validate(x, p, errors));
+            }
+            return Value(std::move(out));
+        }
+        case Kind::FreeTable:
+            if (!v.is_table()) return bad("got " + std::string(v.type_name()));
+            return v;
+    }
+    return v;
+}
+
+void Field::document(const std::string& prefix, std::string& out) const {
+    std::string key = join(prefix, name_);
+    if (kind_ == Kind::Table || kind_ == Kind::TableArray) {
+        out += table_->document(kind_ == Kind::TableArray ? key + "[]" : key);
+        return;
+    }
+    std::string def = required_ ? "required" : (fallback_ ? describe(*fallback_) : "optional");
+    if (fallback_ && fallback_->is_array()) {
+        def = "[";
+        for (std::size_t i = 0; i < fallback_->as_array().size(); ++i)
+            def += (i ? ", " : "") + describe(fallback_->as_array()[i]);
+        def += "]";
+    }
+    out += "| `" + key + "` | " + allowed() + " | " + def + " | " + doc_ + " |\n";
+}
+
+Field& TableSchema::add(Field f) {
+    for (auto& existing : fields_)
+        if (existing.name() == f.name()) throw std::logic_error("schema: duplicate key " + f.name());
+    fields_.push_back(std::move(f));
+    return fields_.back();
+}
+
+Field& TableSchema::number(std::string n, std::string d) { return add(Field(std::move(n), Field::Kind::Number, std::move(d))); }
+Field& TableSchema::integer(std::string n, std::string d) { return add(Field(std::move(n), Field::Kind::Integer, std::move(d))); }
+Field& TableSchema::boolean(std::string n, std::string d) { return add(Field(std::move(n), Field::Kind::Boolean, std::move(d))); }
+Field& TableSchema::string(std::string n, std::string d) { return add(Field(std::move(n), Field::Kind::String, std::move(d))); }
+Field& TableSchema::choice(std::string n, std::vector<std::string> allowed, std::string d) {
+    Field& f = add(Field(std::move(n), Field::Kind::Choice, std::move(d)));
+    f.choices_ = std::move(allowed);
+    return f;
+}
+Field& TableSchema::vector(std::string n, std::size_t length, std::string d) {
+    Field& f = add(Field(std::move(n), Field::Kind::Vector, std::move(d)));
+    f.length_ = length;
+    return f;
+}
+TableSchema& TableSchema::table(std::string n, std::string d, bool req) {
+    Field f(std::move(n), Field::Kind::Table, d);
+    f.table_ = std::make_shared<TableSchema>(std::move(d));
+    f.required_ = req;
+    return *add(std::move(f)).table_;
+}
+TableSchema& TableSchema::table_array(std::string n, std::string d) {
+    Field f(std::move(n), Field::Kind::TableArray, d);
+    f.table_ = std::make_shared<TableSchema>(std::move(d));
+    return *add(std::move(f)).table_;
+}
+Field& TableSchema::free_table(std::string n, std::string d) {
+    return add(Field(std::move(n), Field::Kind::FreeTable, std::move(d)));
+}
+
+Value TableSchema::validate(const Value& input, const std::string& path, Errors& errors) const {
+    Value::Table out;
+    if (!input.is_table()) {
+        errors.add(&input, "key '" + path + "': got " + input.type_name() + "; allowed: a table");
+        return input;
+    }
+    for (const auto& [key, v] : input.as_table()) {
+        bool known = false;
+        for (const Field& f : fields_) known = known || f.name() == key;
+        if (!known) {
+            std::vector<std::string> names;
+            for (const Field& f : fields_) names.push_back(f.name());
+            errors.add(&v, "unknown key '" + join(path, key) + "'; allowed keys here: " +
+                               (names.empty() ? std::string("none") : quoted_list(names)));
+        }
+    }
+    for (const Field& f : fields_) {
+        std::string key = join(path, f.name());
+        if (const Value* v = input.find(f.name())) {
+            Value checked = f.validate(*v, key, errors);
+            checked.line = v->line;
+            out[f.name()] = std::move(checked);
+        } else if (f.is_required()) {
+            errors.add(&input, "missing required key '" + key + "'; allowed: " + f.allowed());
+        } else if (f.fallback_) {
+            out[f.name()] = *f.fallback_;
+        }
+    }
+    Value result(std::move(out));
+    result.line = input.line;
+    std::size_t before = errors.items.size();
+    if (before == 0)  // cross-key rules only make sense on individually valid keys
+        for (const auto& c : checks_) c(result, path, errors);
+    return result;
+}
+
+std::string TableSchema::document(const std::string& path) const {
+    std::string out;
+    std::string head = path.empty() ? "(top level)" : "`[" + path + "]`";
+    out += "\n#### " + head + "\n\n" + (doc_.empty() ? "" : doc_ + "\n\n");
+    out += "| key | allowed | default | meaning |\n|---|---|---|---|\n";
+    std::string nested;
+    for (const Field& f : fields_) {
+        if (f.kind() == Field::Kind::Table || f.kind() == Field::Kind::TableArray)
+            f.document(path, nested);
+        else
+            f.document(path, out);
+    }
+    return out + nested;
+}
+
+void throw_if_any(const Errors& errors, const std::string& source) {
+    if (errors.empty()) return;
+    std::string msg;
+    for (const auto& e : errors.items) msg += source + ": " + e + "\n";
+    msg.pop_back();
+    throw ConfigError(msg);
+}
+
+}  // namespace sphfsi::schema

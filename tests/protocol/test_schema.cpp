@@ -1,0 +1,87 @@
+// Scene-section schemas: every kind of mistake is reported with the key and the allowed values.
+#include <doctest/doctest.h>
+
+#include "sphfsi/protocol/schema.hpp"
+
+using namespace sphfsi;
+using namespace sphfsi::schema;
+
+namespace {
+TableSchema example() {
+    TableSchema s("example");
+    s.number("dp", "spacing").unit("m").greater_than(0).at_most(0.1).required();
+    s.integer("layers", "wall layers").at_least(1).at_most(8).fallback(3);
+    s.choice("kernel", {"wendland", "cubic"}, "kernel").fallback("wendland");
+    s.vector("gravity", 2, "gravity").unit("m/s^2").fallback(Value::Array{0.0, -9.81});
+    auto& block = s.table_array("block", "water");
+    block.number("width", "w").greater_than(0).required();
+    return s;
+}
+
+std::string errors_of(const Value& input) {
+    Errors e;
+    example().validate(input, "fluid", e);
+    std::string all;
+    for (const auto& x : e.items) all += x + "\n";
+    return all;
+}
+
+Value table(Value::Table t) { return Value(std::move(t)); }
+}  // namespace
+
+TEST_CASE("defaults are filled and ints widen to floats") {
+    Errors e;
+    Value out = example().validate(table({{"dp", Value(std::int64_t{0})}}), "fluid", e);
+    CHECK(e.items.size() == 1);  // 0 is out of range (> 0)
+    Errors ok;
+    out = example().validate(table({{"dp", Value(std::int64_t{0}) }}), "fluid", ok);
+    Value good = example().validate(table({{"dp", Value(0.01)}}), "fluid", ok);
+    CHECK(good.at("layers").as_int() == 3);
+    CHECK(good.at("kernel").as_string() == "wendland");
+    CHECK(good.at("gravity").as_doubles()[1] == doctest::Approx(-9.81));
+}
+
+TEST_CASE("each kind of mistake names the key and what is allowed") {
+    CHECK(errors_of(table({})).find("missing required key 'fluid.dp'") != std::string::npos);
+    CHECK(errors_of(table({{"dp", Value(0.5)}})).find("key 'fluid.dp': got 0.5; allowed: a number > 0 and <= 0.1 (m)") !=
+          std::string::npos);
+    CHECK(errors_of(table({{"dp", Value("small")}})).find("key 'fluid.dp': got a string") != std::string::npos);
+    CHECK(errors_of(table({{"dp", Value(0.01)}, {"kernal", Value("cubic")}}))
+              .find("unknown key 'fluid.kernal'; allowed keys here:") != std::string::npos);
+    CHECK(errors_of(table({{"dp", Value(0.01)}, {"kernel", Value("gauss")}}))
+              .find("allowed: one of \"wendland\", \"cubic\"") != std::string::npos);
+    CHECK(errors_of(table({{"dp", Value(0.01)}, {"layers", Value(2.5)}})).find("key 'fluid.layers': got a float") !=
+          std::string::npos);
+    CHECK(errors_of(table({{"dp", Value(0.01)}, {"gravity", Value(Value::Array{Value(1.0)})}}))
+              .find("got 1 entries") != std::string::npos);
+    CHECK(errors_of(table({{"dp", Value(0.01)}, {"block", Value(Value::Array{table({})})}}))
+              .find("missing required key 'fluid.block[0].width'") != std::string::npos);
+}
+
+TEST_CASE("line numbers are reported when known") {
+    Value dp(0.5);
+    dp.line = 12;
+    CHECK(errors_of(table({{"dp", dp}})).rfind("line 12: key 'fluid.dp'", 0) == 0);
+}
+
+TEST_CASE("cross-key checks run only on individually valid tables") {
+    TableSchema s;
+    s.number("a", "").required();
+    s.number("b", "").required();
+    s.check([](const Value& t, const std::string& path, Errors& e) {
+        if (t.at("a").as_double() > t.at("b").as_double()) e.add(&t, path + ": a must not exceed b");
+    });
+    Errors e;
+    s.validate(table({{"a", Value(2.0)}, {"b", Value(1.0)}}), "x", e);
+    REQUIRE(e.items.size() == 1);
+    CHECK(e.items[0] == "x: a must not exceed b");
+    Errors e2;
+    s.validate(table({{"a", Value(2.0)}}), "x", e2);
+    CHECK(e2.items.size() == 1);  // only the missing key, no crash in the check
+}
+
+TEST_CASE("the reference documents every key") {
+    std::string doc = example().document("fluid");
+    for (const char* key : {"`fluid.dp`", "`fluid.layers`", "`fluid.kernel`", "`fluid.gravity`", "`fluid.block[].width`"})
+        CHECK(doc.find(key) != std::string::npos);
+}
