@@ -1,0 +1,18 @@
+#pragma once
+// Global matrices and force vectors from the element routines (all in full DOF numbering; the
+// support constraints are applied later through Model::T).
+#include "sphfsi/structure/element.hpp"
+#include "sphfsi/structure/model.hpp"
+
+namespace sphfsi::structure {
+
+SparseMatrix assemble_linear_stiffness(const Model& model);
+SparseMatrix assemble_mass(const Model& model, MassKind kind);
+
+// Co-rotational internal force at displacement u; tangent and strain energy when asked for.
+Vector corotational_internal_force(const Model& model, const Vector& u, SparseMatrix* tangent, double* strain_energy);
+
+// Current chord angle of every element (reference angle when `u` is empty).
+std::vector<double> element_angles(const Model& model, const Vector& u);
+
+}  // namespace sphfsi::structure

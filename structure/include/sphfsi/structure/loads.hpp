@@ -1,0 +1,41 @@
+#pragma once
+// The scene's own prescribed loads (point, distributed, self-weight) as a nodal load vector.
+#include <vector>
+
+#include "sphfsi/structure/config.hpp"
+#include "sphfsi/structure/model.hpp"
+
+namespace sphfsi::structure {
+
+class SceneLoads {
+public:
+    SceneLoads(const StructureConfig& config, const Model& model);
+
+    // Nodal loads at time t. Distributed loads (and gravity) are dead loads per unit reference
+    // length; their fixed-end moments use the element orientation of `u` (the configuration at the
+    // start of the step) when `follow_rotation`, else the reference orientation.
+    Vector at(double t, const Vector& u, bool follow_rotation) const;
+
+    bool empty() const { return point_.empty() && distributed_.empty(); }
+
+private:
+    struct NodalLoad {
+        int node;
+        Vec2 force;
+        double moment;
+        History history;
+    };
+    struct MemberLoad {
+        int member;
+        Vec2 q;
+        History history;
+    };
+    const Model* model_;
+    std::vector<NodalLoad> point_;
+    std::vector<MemberLoad> distributed_;
+};
+
+// Nodal load vector of point loads held constant (used for the preload of a plucked start).
+Vector point_load_vector(const Model& model, const std::vector<PointLoadSpec>& loads, const char* what);
+
+}  // namespace sphfsi::structure

@@ -1,0 +1,92 @@
+#include "sphfsi/structure/checkpoint.hpp"
+
+#include <bit>
+#include <cstring>
+#include <string_view>
+
+#include "sphfsi/protocol/solver.hpp"
+
+namespace sphfsi::structure {
+
+static_assert(std::endian::native == std::endian::little, "checkpoint layout assumes a little-endian host");
+
+namespace {
+
+constexpr std::string_view magic = "sphfsi-structure-state-v1";
+
+// Changes whenever nodes or connectivity change, so a checkpoint cannot resume a different mesh.
+double fingerprint(const Model& model) {
+    double f = 0;
+    for (std::size_t i = 0; i < model.nodes.size(); ++i)
+        f += (i + 1.0) * model.nodes[i].x() + 0.5 * (i + 2.0) * model.nodes[i].y();
+    for (std::size_t i = 0; i < model.elements.size(); ++i)
+        f += 1e-3 * (i + 1.0) * (model.elements[i].n1 + 2.0 * model.elements[i].n2);
+    return f;
+}
+
+struct Writer {
+    std::vector<std::uint8_t> out;
+    void raw(const void* p, std::size_t n) {
+        const auto* b = static_cast<const std::uint8_t*>(p);
+        out.insert(out.end(), b, b + n);
+    }
+    template <class T>
+    void put(T x) { raw(&x, sizeof x); }
+};
+
+struct Reader {
+    const std::vector<std::uint8_t>& in;
+    std::size_t at = 0;
+    void raw(void* p, std::size_t n) {
+        if (at + n > in.size()) throw protocol::SolverError("bad_config", "structure: checkpoint is truncated");
+        std::memcpy(p, in.data() + at, n);
+        at += n;
+    }
+    template <class T>
+    T get() {
+        T x;
+        raw(&x, sizeof x);
+        return x;
+    }
+};
+
+}  // namespace
+
+std::vector<std::uint8_t> encode_state(const State& s, const Model& model) {
+    Writer w;
+    w.raw(magic.data(), magic.size());
+    w.put<std::uint64_t>(static_cast<std::uint64_t>(model.dof_count()));
+    w.put<std::uint64_t>(model.elements.size());
+    w.put<double>(fingerprint(model));
+    w.put<double>(s.t);
+    w.put<std::uint64_t>(s.step);
+    w.put<double>(s.external_work);
+    for (const Vector* x : {&s.u, &s.v, &s.a}) w.raw(x->data(), sizeof(double) * x->size());
+    return w.out;
+}
+
+State decode_state(const std::vector<std::uint8_t>& bytes, const Model& model) {
+    Reader r{bytes};
+    std::string head(magic.size(), '\0');
+    r.raw(head.data(), head.size());
+    if (head != magic) throw protocol::SolverError("bad_config", "structure: the resume state is not a structure checkpoint");
+    const auto dofs = r.get<std::uint64_t>(), elements = r.get<std::uint64_t>();
+    const double print = r.get<double>();
+    if (dofs != static_cast<std::uint64_t>(model.dof_count()) || elements != model.elements.size() ||
+        print != fingerprint(model))
+        throw protocol::SolverError("bad_config", "structure: the checkpoint belongs to a different mesh (" +
+                                                      std::to_string(elements) + " elements; this scene has " +
+                                                      std::to_string(model.elements.size()) + ")");
+    State s;
+    s.t = r.get<double>();
+    s.step = r.get<std::uint64_t>();
+    s.external_work = r.get<double>();
+    for (Vector* x : {&s.u, &s.v, &s.a}) {
+        x->resize(model.dof_count());
+        r.raw(x->data(), sizeof(double) * x->size());
+    }
+    if (r.at != bytes.size()) throw protocol::SolverError("bad_config", "structure: checkpoint has trailing bytes");
+    return s;
+}
+
+}  // namespace sphfsi::structure

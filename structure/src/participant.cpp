@@ -1,0 +1,151 @@
+#include "sphfsi/structure/participant.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+#include "sphfsi/structure/checkpoint.hpp"
+#include "sphfsi/structure/schema.hpp"
+
+namespace sphfsi::structure {
+
+using namespace sphfsi::protocol;
+
+namespace {
+std::string num(double x) {
+    std::ostringstream s;
+    s.precision(12);
+    s << x;
+    return s.str();
+}
+}  // namespace
+
+const schema::TableSchema& StructureSolver::schema() const { return scene_schema(); }
+
+FrameDynamics& StructureSolver::dyn() {
+    if (!dynamics_) throw SolverError("internal", "structure: used before INIT");
+    return *dynamics_;
+}
+
+InitReply StructureSolver::init(const InitRequest& request) {
+    StructureConfig config;
+    try {
+        config = StructureConfig::from_value(request.config);
+    } catch (const ConfigError& e) {
+        throw SolverError("bad_config", e.what());
+    }
+    dynamics_ = std::make_unique<FrameDynamics>(std::move(config), request.t0);
+    if (!request.state.empty()) dynamics_->state() = decode_state(request.state, dynamics_->model());
+    interface_ = std::make_unique<InterfaceMap>(dynamics_->model(), dynamics_->config());
+    saved_.reset();
+    dt_wanted_ = std::min(dynamics_->config().time.dt_max, dynamics_->dt_accuracy());
+
+    InitReply reply;
+    reply.dt_wanted = dt_wanted_;
+    if (interface_->vertex_count() > 0) reply.interface = interface_->mesh();
+    const Model& m = dynamics_->model();
+    const Modes& modes = dynamics_->modes();
+    Value::Table freqs;  // READY info holds numbers, strings, booleans and maps, no arrays
+    for (int i = modes.rigid_body; i < modes.omega2.size(); ++i)
+        freqs["mode_" + std::to_string(i - modes.rigid_body + 1)] = Value(modes.omega(i) / (2 * std::numbers::pi));
+    Value::Table info{{"nodes", Value(m.node_count())},
+                      {"elements", Value(static_cast<int>(m.elements.size()))},
+                      {"free_dofs", Value(m.free_count())},
+                      {"interface_vertices", Value(static_cast<std::int64_t>(interface_->vertex_count()))},
+                      {"natural_frequencies_hz", Value(std::move(freqs))},
+                      {"dt_accuracy", Value(dynamics_->dt_accuracy())},
+                      {"t", Value(dynamics_->state().t)}};
+    if (dynamics_->config().damping.kind != DampingKind::None) {
+        info["damping_alpha"] = Value(dynamics_->rayleigh_alpha());
+        info["damping_beta"] = Value(dynamics_->rayleigh_beta());
+    }
+    reply.info = Value(std::move(info));
+    return reply;
+}
+
+AdvanceReply StructureSolver::advance(const AdvanceRequest& request, Progress& progress) {
+    FrameDynamics& d = dyn();
+    const double t0 = d.state().t;
+    if (!(request.dt > 0) || !std::isfinite(request.dt))
+        throw SolverError("internal", "structure: ADVANCE with dt = " + num(request.dt));
+    if (std::abs(request.t - t0) > 1e-9 * std::max(request.dt, std::abs(t0)))
+        throw SolverError("internal", "structure: ADVANCE from t=" + num(request.t) + " but the structure is at t=" + num(t0));
+
+    std::uint32_t n = request.substeps;
+    if (n == 0) n = static_cast<std::uint32_t>(std::max(1.0, std::ceil(request.dt / dt_wanted_ * (1.0 - 1e-12))));
+    const double h = request.dt / n;
+
+    const F64Array* force = nullptr;
+    if (auto it = request.inputs.find("force"); it != request.inputs.end()) {
+        force = std::get_if<F64Array>(&it->second);
+        if (!force) throw SolverError("bad_message", "structure: inputs[\"force\"] must be an f8 array");
+    }
+    const double depth = d.config().section.depth;
+
+    AdvanceReply reply;
+    int max_iterations = 0;
+    for (std::uint32_t k = 0; k < n; ++k) {
+        // Moment arms of the vertex forces follow the cross-sections: taken at each sub-step's start.
+        const Vector extra = force ? interface_->lump(*force, d.state().u, depth) : Vector();
+        const StepReport r = d.step(h, extra);
+        reply.solver_iterations += static_cast<std::uint32_t>(r.iterations);
+        max_iterations = std::max(max_iterations, r.iterations);
+        progress.tick();
+    }
+    d.state().t = request.t + request.dt;  // land exactly on the window end, no round-off drift
+
+    reply.t = d.state().t;
+    reply.dt_wanted = dt_wanted_;
+    reply.substeps = n;
+    reply.outputs["displacement"] = interface_->displacement(d.state().u);
+    reply.outputs["velocity"] = interface_->velocity(d.state().u, d.state().v);
+    const Energies e = d.energies();
+    double umax = 0;
+    for (int i = 0; i < d.model().node_count(); ++i) umax = std::max(umax, d.state().u.segment<2>(3 * i).norm());
+    reply.stats = Value(Value::Table{{"newton_iterations_max", Value(max_iterations)},
+                                     {"factorizations", Value(d.factorizations())},
+                                     {"kinetic_energy", Value(e.kinetic)},
+                                     {"strain_energy", Value(e.strain)},
+                                     {"external_work", Value(e.external_work)},
+                                     {"max_displacement", Value(umax)}});
+    return reply;
+}
+
+void StructureSolver::save() { saved_ = dyn().state(); }
+
+void StructureSolver::restore() {
+    if (!saved_) throw SolverError("internal", "structure: RESTORE without a SAVE");
+    dyn().state() = *saved_;
+}
+
+Fields StructureSolver::snapshot() {
+    const FrameDynamics& d = dyn();
+    const Model& m = d.model();
+    const auto n = static_cast<std::uint64_t>(m.node_count());
+    F64Array nodes = F64Array::zeros(n, 2), disp = F64Array::zeros(n, 3), vel = F64Array::zeros(n, 3);
+    for (std::uint64_t i = 0; i < n; ++i) {
+        nodes(i, 0) = m.nodes[i].x();
+        nodes(i, 1) = m.nodes[i].y();
+        for (int k = 0; k < 3; ++k) {
+            disp(i, k) = d.state().u[3 * i + k];
+            vel(i, k) = d.state().v[3 * i + k];
+        }
+    }
+    I32Array elements = I32Array::zeros(m.elements.size(), 2);
+    for (std::size_t i = 0; i < m.elements.size(); ++i) {
+        elements(i, 0) = m.elements[i].n1;
+        elements(i, 1) = m.elements[i].n2;
+    }
+    const Energies e = d.energies();
+    Fields f;
+    f["nodes"] = std::move(nodes);
+    f["displacement"] = std::move(disp);
+    f["velocity"] = std::move(vel);
+    f["elements"] = std::move(elements);
+    f["energy"] = F64Array({1, 3}, {e.kinetic, e.strain, e.external_work});
+    return f;
+}
+
+std::vector<std::uint8_t> StructureSolver::checkpoint() { return encode_state(dyn().state(), dyn().model()); }
+
+}  // namespace sphfsi::structure

@@ -1,0 +1,325 @@
+#include "sphfsi/structure/schema.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+namespace sphfsi::structure {
+namespace {
+
+using schema::Errors;
+using schema::TableSchema;
+
+struct Point {
+    double x, y;
+};
+
+Point point_of(const Value& v) {
+    auto d = v.as_doubles();
+    return {d[0], d[1]};
+}
+
+std::string show(Point p) {
+    std::ostringstream s;
+    s << "[" << p.x << ", " << p.y << "]";
+    return s.str();
+}
+
+// The keys that make a load time-dependent; shared by point and distributed loads.
+void add_history_keys(TableSchema& t) {
+    t.choice("history", {"constant", "ramp", "sine"},
+             "time factor f(t) applied to the load while start_time <= t < end_time: constant 1; "
+             "ramp min((t-start_time)/ramp_time, 1); sine sin(2 pi frequency (t-start_time) + phase)")
+        .fallback("constant");
+    t.number("ramp_time", "duration of the linear ramp from 0 to the full load (history = \"ramp\")")
+        .unit("s").greater_than(0).fallback(1.0);
+    t.number("frequency", "frequency of the sine (history = \"sine\")").unit("Hz").greater_than(0).fallback(1.0);
+    t.number("phase", "phase of the sine at start_time (history = \"sine\")").unit("rad").fallback(0.0);
+    t.number("start_time", "the load is zero before this time").unit("s").fallback(0.0);
+    t.number("end_time", "the load is zero from this time on; absent = never switched off").unit("s");
+}
+
+void add_point_load_keys(TableSchema& t) {
+    t.vector("at", 2, "where the load acts; must coincide with a node of some member").unit("m").required();
+    t.vector("force", 2, "force [Fx, Fy] in global axes, on the whole depth b").unit("N").fallback(Value::Array{0.0, 0.0});
+    t.number("moment", "in-plane moment, counter-clockwise positive, on the whole depth b").unit("N m").fallback(0.0);
+}
+
+// Node positions exactly as the model builder creates them: start + k/n (end - start).
+struct MemberGeometry {
+    Point a, b;
+    std::int64_t n;
+    Point node(std::int64_t k) const {
+        double s = static_cast<double>(k) / static_cast<double>(n);
+        return {a.x + s * (b.x - a.x), a.y + s * (b.y - a.y)};
+    }
+    double length() const { return std::hypot(b.x - a.x, b.y - a.y); }
+};
+
+std::vector<MemberGeometry> members_of(const Value& table) {
+    std::vector<MemberGeometry> out;
+    if (const Value* ms = table.find("members"))
+        for (const Value& m : ms->as_array())
+            out.push_back({point_of(m.at("start")), point_of(m.at("end")), m.at("n_elements").as_int()});
+    return out;
+}
+
+// Points closer than this are the same node. Relative to the largest member so that scenes in
+// millimetres and in kilometres behave alike; far above round-off of the node interpolation.
+double node_tolerance(const std::vector<MemberGeometry>& members) {
+    double size = 0.0;
+    for (const auto& m : members) size = std::max(size, m.length());
+    return 1e-6 * size;
+}
+
+bool on_a_node(const std::vector<MemberGeometry>& members, Point p, double tol) {
+    for (const auto& m : members)
+        for (std::int64_t k = 0; k <= m.n; ++k) {
+            Point q = m.node(k);
+            if (std::hypot(q.x - p.x, q.y - p.y) <= tol) return true;
+        }
+    return false;
+}
+
+// Every table_array entry whose `at` must be a node.
+void check_points_on_nodes(const Value* entries, const std::string& path, const std::vector<MemberGeometry>& members,
+                           double tol, Errors& errors) {
+    if (!entries) return;
+    std::size_t i = 0;
+    for (const Value& e : entries->as_array()) {
+        Point p = point_of(e.at("at"));
+        if (!on_a_node(members, p, tol))
+            errors.add(&e, "key '" + path + "[" + std::to_string(i) + "].at': " + show(p) +
+                               " is not a node of any member; nodes are start + k/n_elements (end - start)");
+        ++i;
+    }
+}
+
+void check_structure(const Value& s, const std::string& path, Errors& errors) {
+    const auto members = members_of(s);
+    if (members.empty()) {
+        errors.add(&s, "key '" + path + ".members': at least one [[" + path + ".members]] is needed");
+        return;
+    }
+    const double tol = node_tolerance(members);
+
+    // Members connect only at nodes; an end that lands between two nodes of another member would be
+    // silently disconnected, which is never what the engineer meant.
+    for (std::size_t i = 0; i < members.size(); ++i) {
+        for (Point end : {members[i].a, members[i].b}) {
+            for (std::size_t j = 0; j < members.size(); ++j) {
+                if (i == j) continue;
+                const auto& m = members[j];
+                double L = m.length();
+                double ex = (m.b.x - m.a.x) / L, ey = (m.b.y - m.a.y) / L;
+                double s_along = (end.x - m.a.x) * ex + (end.y - m.a.y) * ey;
+                double off = std::abs(-(end.x - m.a.x) * ey + (end.y - m.a.y) * ex);
+                if (off > tol || s_along < -tol || s_along > L + tol) continue;
+                bool at_node = false;
+                for (std::int64_t k = 0; k <= m.n && !at_node; ++k) {
+                    Point q = m.node(k);
+                    at_node = std::hypot(q.x - end.x, q.y - end.y) <= tol;
+                }
+                if (!at_node)
+                    errors.add(&s, "key '" + path + ".members[" + std::to_string(i) + "]': end " + show(end) +
+                                       " lies on members[" + std::to_string(j) +
+                                       "] between two of its nodes; members connect only at nodes, so choose "
+                                       "n_elements of members[" + std::to_string(j) + "] to put a node there");
+            }
+        }
+    }
+
+    check_points_on_nodes(s.find("supports"), path + ".supports", members, tol, errors);
+    check_points_on_nodes(s.find("point_loads"), path + ".point_loads", members, tol, errors);
+    if (const Value* init = s.find("initial"))
+        check_points_on_nodes(init->find("preload"), path + ".initial.preload", members, tol, errors);
+
+    if (const Value* sup = s.find("supports")) {
+        const auto& a = sup->as_array();
+        for (std::size_t i = 0; i < a.size(); ++i)
+            for (std::size_t j = 0; j < i; ++j) {
+                Point p = point_of(a[i].at("at")), q = point_of(a[j].at("at"));
+                if (std::hypot(p.x - q.x, p.y - q.y) <= tol)
+                    errors.add(&a[i], "key '" + path + ".supports[" + std::to_string(i) + "]': same node as supports[" +
+                                          std::to_string(j) + "]; give one support per node");
+            }
+    }
+
+    if (const Value* dl = s.find("distributed_loads")) {
+        std::size_t i = 0;
+        for (const Value& d : dl->as_array()) {
+            auto m = d.at("member").as_int();
+            if (m >= static_cast<std::int64_t>(members.size()))
+                errors.add(&d, "key '" + path + ".distributed_loads[" + std::to_string(i) + "].member': " +
+                                   std::to_string(m) + " but there are only " + std::to_string(members.size()) +
+                                   " members (indices from 0)");
+            ++i;
+        }
+    }
+
+    if (const Value* init = s.find("initial")) {
+        bool statics = init->at("static_equilibrium").as_bool() || init->contains("preload");
+        if (statics && init->at("mode").as_int() > 0)
+            errors.add(init, "key '" + path + ".initial': a mode-shape start (mode > 0) and a static start "
+                             "(static_equilibrium / preload) exclude each other; choose one");
+    }
+}
+
+void check_history(const Value& t, const std::string& path, Errors& errors) {
+    if (const Value* end = t.find("end_time"))
+        if (!(end->as_double() > t.at("start_time").as_double()))
+            errors.add(end, "key '" + path + ".end_time': must be after start_time");
+}
+
+TableSchema build() {
+    TableSchema s(
+        "Plane frame of Euler-Bernoulli beams (axial + bending, 3 DOF per node) in SI units. The model is a "
+        "slab of depth b (section.depth): stiffness and mass are those of the b-deep section, scene loads are "
+        "totals on that depth, and the fluid's forces (2D, N per metre of depth) are multiplied by b.");
+
+    s.choice("formulation", {"linear", "corotational"},
+             "\"linear\": small displacements, one linear solve per step with a reused factorization; "
+             "\"corotational\": large rotations (Crisfield/Battini), Newton iterations per step")
+        .fallback("linear");
+    s.choice("mass", {"consistent", "lumped"},
+             "mass matrix: consistent (Hermitian cubic) or lumped (rho A L/2 per node, rotary rho A L^3/78, HRZ)")
+        .fallback("consistent");
+    s.boolean("gravity", "apply self-weight rho A g as a distributed load on every member").fallback(false);
+    s.vector("gravity_vector", 2, "gravitational acceleration used when gravity = true").unit("m/s^2")
+        .fallback(Value::Array{0.0, -9.81});
+
+    auto& mat = s.table("material", "Linear elastic isotropic material.", true);
+    mat.number("E", "Young's modulus").unit("Pa").greater_than(0).required();
+    mat.number("nu", "Poisson's ratio; used only when section.plane_strain = true").at_least(0).less_than(0.5)
+        .fallback(0.3);
+    mat.number("rho", "density").unit("kg/m^3").greater_than(0).required();
+
+    auto& sec = s.table("section", "Solid rectangular cross-section: A = b t, I = b t^3 / 12.", true);
+    sec.number("thickness", "in-plane thickness t (also the distance between the two wetted faces)").unit("m")
+        .greater_than(0).required();
+    sec.number("depth", "out-of-plane depth b; the fluid is 2D per metre of depth, keep 1 unless you mean it")
+        .unit("m").greater_than(0).fallback(1.0);
+    sec.boolean("plane_strain",
+                "use E / (1 - nu^2): a plate strip in cylindrical bending (a gate spanning the whole channel)")
+        .fallback(false);
+
+    auto& mem = s.table_array("members", "Straight members from start to end, meshed with n_elements equal "
+                                         "elements. A member end that meets a node of another member is rigidly joined to it.");
+    mem.string("name", "label used in messages");
+    mem.vector("start", 2, "first end point").unit("m").required();
+    mem.vector("end", 2, "second end point").unit("m").required();
+    mem.integer("n_elements", "number of equal beam elements").at_least(1).at_most(100000).fallback(10);
+    mem.boolean("wetted", "publish this member's faces (at +-t/2) as fluid interface").fallback(true);
+    mem.check([](const Value& m, const std::string& path, Errors& errors) {
+        Point a = point_of(m.at("start")), b = point_of(m.at("end"));
+        if (!(std::hypot(b.x - a.x, b.y - a.y) > 0.0))
+            errors.add(&m, "key '" + path + "': start and end are the same point; a member needs length > 0");
+    });
+
+    auto& sup = s.table_array("supports", "Supports at nodes; nodes without one are free.");
+    sup.vector("at", 2, "the supported node").unit("m").required();
+    sup.choice("type", {"clamped", "pinned", "roller", "free"},
+               "clamped: ux, uy, theta fixed; pinned: ux, uy fixed; roller: motion along `normal` fixed; free: none")
+        .required();
+    sup.vector("normal", 2, "roller only: the restrained direction (normal of the rolling surface)")
+        .fallback(Value::Array{0.0, 1.0});
+    sup.check([](const Value& t, const std::string& path, Errors& errors) {
+        Point n = point_of(t.at("normal"));
+        if (!(std::hypot(n.x, n.y) > 0.0)) errors.add(&t, "key '" + path + ".normal': must not be [0, 0]");
+    });
+
+    auto& pl = s.table_array("point_loads", "Dead (non-follower) point loads at nodes.");
+    add_point_load_keys(pl);
+    add_history_keys(pl);
+    pl.check(check_history);
+
+    auto& dl = s.table_array("distributed_loads",
+                             "Dead uniform loads per unit reference length of a member, in global axes.");
+    dl.integer("member", "index of the loaded member in [[members]], from 0").at_least(0).required();
+    dl.vector("q", 2, "load intensity [qx, qy] on the whole depth b").unit("N/m").required();
+    add_history_keys(dl);
+    dl.check(check_history);
+
+    auto& damp = s.table("damping", "Viscous damping matrix D in M a + D v + f_int(u) = f_ext.");
+    damp.choice("model", {"none", "simple", "rayleigh"},
+                "none: D = 0; simple: D = c M (the thesis's matrix, damping ratio c / (2 omega) in every mode); "
+                "rayleigh: D = alpha M + beta K0 from target ratios at two frequencies")
+        .fallback("none");
+    damp.number("c", "coefficient of the simple model D = c M").unit("1/s").at_least(0).fallback(0.0);
+    damp.vector("ratios", 2, "rayleigh: target damping ratios zeta1, zeta2 at the two frequencies").at_least(0)
+        .less_than(1).fallback(Value::Array{0.02, 0.02});
+    damp.vector("frequencies", 2,
+                "rayleigh: the two frequencies f1 < f2; absent = the 1st and the time.resolved_modes-th "
+                "natural frequency")
+        .unit("Hz").greater_than(0);
+    damp.check([](const Value& t, const std::string& path, Errors& errors) {
+        if (const Value* f = t.find("frequencies")) {
+            auto v = f->as_doubles();
+            if (!(v[0] < v[1])) errors.add(f, "key '" + path + ".frequencies': need f1 < f2");
+        }
+    });
+
+    auto& time = s.table("time", "Time integration.");
+    time.choice("integrator", {"backward_euler", "newmark", "generalized_alpha"},
+                "backward_euler: first order, strongly damped (the thesis's choice); newmark: average "
+                "acceleration, second order, energy conserving when linear but can go unstable for large "
+                "corotational motions at coarse steps; generalized_alpha: second order with high-frequency "
+                "damping set by rho_inf (Chung & Hulbert 1993), the robust choice")
+        .fallback("generalized_alpha");
+    time.number("rho_inf", "generalized_alpha: spectral radius at omega dt -> infinity (1 = no damping)")
+        .at_least(0).at_most(1).fallback(0.9);
+    time.number("dt_max", "largest step the structure accepts").unit("s").greater_than(0).fallback(1e-3);
+    time.integer("resolved_modes", "the accuracy limit on the step resolves this many lowest elastic modes")
+        .at_least(1).at_most(50).fallback(3);
+    time.number("steps_per_period", "accuracy limit: at least this many steps per period of the highest resolved mode")
+        .at_least(2).fallback(20.0);
+    time.number("max_numerical_damping",
+                "backward_euler only: largest algorithmic damping ratio ln(1+W^2)/(2 atan W), W = omega dt, "
+                "tolerated in the highest resolved mode")
+        .greater_than(0).at_most(0.5).fallback(0.05);
+
+    auto& newton = s.table("newton", "Newton-Raphson iterations (corotational steps, static solves).");
+    newton.number("tolerance", "converged when |residual| <= tolerance * largest force term (free DOFs), or "
+                               "when it stops halving below sqrt(tolerance) * that (round-off floor of big models)")
+        .greater_than(0).less_than(1).fallback(1e-8);
+    newton.integer("max_iterations", "iterations per step before the run stops with not_converged")
+        .at_least(1).at_most(1000).fallback(25);
+    newton.integer("load_steps", "static solves (initial equilibrium): load increments").at_least(1).at_most(10000)
+        .fallback(10);
+
+    auto& init = s.table("initial", "Initial state at t0 (default: undeformed, at rest).");
+    init.boolean("static_equilibrium", "start from static equilibrium under the scene loads at t0 (and any preload)")
+        .fallback(false);
+    init.integer("mode", "start deflected in this natural mode (1 = fundamental), at rest; 0 = off").at_least(0)
+        .fallback(0);
+    init.number("mode_amplitude", "largest nodal translation of that mode shape").unit("m").fallback(0.0);
+    auto& pre = init.table_array("preload", "Point loads held at t0 and released: a plucked start from rest.");
+    add_point_load_keys(pre);
+
+    s.check(check_structure);
+    return s;
+}
+
+}  // namespace
+
+const schema::TableSchema& scene_schema() {
+    static const TableSchema schema = build();
+    return schema;
+}
+
+Value validated_config(const Value& section, const std::string& source) {
+    Value input = section;
+    if (input.is_table()) {
+        // Present-but-empty optional tables make the validator fill their defaults.
+        auto& t = input.as_table_mut();
+        for (const char* name : {"damping", "time", "newton", "initial"})
+            if (!t.contains(name)) t[name].make_table();
+    }
+    schema::Errors errors;
+    Value out = scene_schema().validate(input, source, errors);
+    schema::throw_if_any(errors, source);
+    return out;
+}
+
+}  // namespace sphfsi::structure

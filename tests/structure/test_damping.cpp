@@ -1,0 +1,96 @@
+// Damping: the ratio measured from the logarithmic decrement of free vibration equals the target.
+// For x(t) = A exp(-zeta w t) cos(w_d t), successive peaks differ by the factor exp(delta) with
+// delta = 2 pi zeta / sqrt(1 - zeta^2), so zeta = delta / sqrt(4 pi^2 + delta^2) (e.g. Chopra, Dynamics
+// of Structures, sec. 2.2.4). Acceptance: within 2 % of the target ratio.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "scenes.hpp"
+#include "sphfsi/protocol/solver.hpp"
+#include "sphfsi/structure/frame_dynamics.hpp"
+
+using namespace structure_test;
+using namespace sphfsi::structure;
+
+namespace {
+constexpr double pi = std::numbers::pi;
+
+// Free vibration from mode `mode` at rest, Newmark (no numerical damping) with 200 steps per period;
+// returns the damping ratio from the decrement of the tip deflection's positive peaks over `periods`.
+double measured_ratio(Value s, int mode, int periods = 8) {
+    set(s, "time.integrator", Value("newmark"));
+    set(s, "initial.mode", Value(mode));
+    set(s, "initial.mode_amplitude", Value(0.01));
+    FrameDynamics f(config(s));
+    const double w = f.modes().omega(mode - 1), h = 2 * pi / w / 200;
+    const int tip = 3 * f.model().node_at({L, 0}) + 1;
+    std::vector<double> x{f.state().u[tip]}, peaks;
+    for (int k = 0; k < 200 * periods + 2; ++k) {
+        f.step(h, Vector());
+        x.push_back(f.state().u[tip]);
+        const std::size_t i = x.size() - 2;
+        if (i > 0 && std::abs(x[i]) > std::abs(x[i - 1]) && std::abs(x[i]) >= std::abs(x[i + 1]) &&
+            (x[i] > 0) == (x[0] > 0)) {
+            // Parabola through three samples: the peak value between them.
+            const double a = 0.5 * (x[i - 1] - 2 * x[i] + x[i + 1]), b = 0.5 * (x[i + 1] - x[i - 1]);
+            peaks.push_back(std::abs(x[i] - b * b / (4 * a)));
+        }
+    }
+    REQUIRE(peaks.size() >= 3);
+    // Start from the initial value (a peak: released at rest) and use the last full peak.
+    const double delta = std::log(std::abs(x[0]) / peaks.back()) / static_cast<double>(peaks.size());
+    return delta / std::sqrt(4 * pi * pi + delta * delta);
+}
+}  // namespace
+
+TEST_SUITE("damping") {
+TEST_CASE("Rayleigh: target ratios at f1 and f3 reproduced in modes 1 and 3, and the curve in between") {
+    Value s = beam(10);
+    set(s, "damping.model", Value("rayleigh"));
+    set(s, "damping.ratios", vec(0.02, 0.05));  // defaults: frequencies = modes 1 and 3 (resolved_modes)
+    const FrameDynamics f(config(s));
+    const double w2 = f.modes().omega(1);
+    for (auto [mode, target] : {std::pair{1, 0.02}, std::pair{3, 0.05},
+                                std::pair{2, f.rayleigh_alpha() / (2 * w2) + f.rayleigh_beta() * w2 / 2}}) {
+        const double zeta = measured_ratio(s, mode);
+        MESSAGE("mode " << mode << ": measured zeta " << zeta << " vs target " << target);
+        CHECK(rel(zeta, target) <= 0.02);
+    }
+}
+
+TEST_CASE("Rayleigh with explicit frequencies") {
+    Value s = beam(10);
+    const FrameDynamics plain(config(s));
+    const double f1 = plain.modes().omega(0) / (2 * pi);
+    set(s, "damping.model", Value("rayleigh"));
+    set(s, "damping.ratios", vec(0.03, 0.03));
+    set(s, "damping.frequencies", vec(f1, 4 * f1));
+    const double zeta = measured_ratio(s, 1);
+    MESSAGE("measured zeta " << zeta << " vs 0.03");
+    CHECK(rel(zeta, 0.03) <= 0.02);
+}
+
+TEST_CASE("simple damping D = c M: zeta = c / (2 omega) in each mode") {
+    Value s = beam(10);
+    const FrameDynamics plain(config(s));
+    const double c = 2 * 0.04 * plain.modes().omega(0);  // 4 % in mode 1
+    set(s, "damping.model", Value("simple"));
+    set(s, "damping.c", Value(c));
+    for (int mode : {1, 2}) {
+        const double target = c / (2 * plain.modes().omega(mode - 1));
+        const double zeta = measured_ratio(s, mode);
+        MESSAGE("mode " << mode << ": measured zeta " << zeta << " vs c/(2 omega) = " << target);
+        CHECK(rel(zeta, target) <= 0.02);
+    }
+}
+
+TEST_CASE("damping ratios that need negative Rayleigh coefficients are refused") {
+    Value s = beam(10);
+    set(s, "damping.model", Value("rayleigh"));
+    set(s, "damping.ratios", vec(0.2, 0.001));
+    CHECK_THROWS_AS(FrameDynamics(config(s)), sphfsi::protocol::SolverError);
+}
+}

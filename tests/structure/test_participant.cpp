@@ -1,0 +1,236 @@
+// The structure through the protocol::Solver interface, as the participant runtime drives it.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <functional>
+
+#include "scenes.hpp"
+#include "sphfsi/structure/participant.hpp"
+
+using namespace structure_test;
+using namespace sphfsi::structure;
+using namespace sphfsi::protocol;
+
+namespace {
+InitRequest request(const Value& scene, std::vector<std::uint8_t> state = {}) {
+    InitRequest r;
+    r.config = scene;
+    r.state = std::move(state);
+    return r;
+}
+// Vertex forces pushing the wetted faces sideways, varying along the member.
+Fields forces(const StructureSolver& s, double scale) {
+    const auto n = s.interface_map().vertex_count();
+    F64Array f = F64Array::zeros(n, 2);
+    for (std::size_t i = 0; i < n; ++i) {
+        f(i, 0) = scale * 3.0;
+        f(i, 1) = -scale * (10.0 + static_cast<double>(i));
+    }
+    return Fields{{"force", f}};
+}
+AdvanceRequest window(double t, double dt, std::uint32_t substeps, Fields inputs = {}) {
+    AdvanceRequest r;
+    r.t = t;
+    r.dt = dt;
+    r.substeps = substeps;
+    r.inputs = std::move(inputs);
+    return r;
+}
+const F64Array& array(const Fields& f, const char* name) { return std::get<F64Array>(f.at(name)); }
+std::string code_of(const std::function<void()>& fn) {
+    try {
+        fn();
+    } catch (const SolverError& e) {
+        return e.code();
+    }
+    return "none";
+}
+Value coupled_scene(const char* formulation = "linear") {
+    Value s = beam(10, "clamped", "", formulation);
+    set(s, "time.dt_max", Value(1e-3));
+    return s;
+}
+}  // namespace
+
+TEST_SUITE("participant") {
+TEST_CASE("init publishes the interface and the step it wants") {
+    StructureSolver s;
+    const InitReply r = s.init(request(coupled_scene()));
+    REQUIRE(r.interface);
+    CHECK(r.interface->vertices.shape == std::vector<std::uint64_t>{22, 2});
+    CHECK(r.interface->cells.shape == std::vector<std::uint64_t>{10, 4});
+    CHECK(r.dt_wanted == doctest::Approx(std::min(1e-3, s.dynamics().dt_accuracy())));
+    CHECK(r.info.at("elements").as_int() == 10);
+    CHECK(r.info.at("natural_frequencies_hz").at("mode_1").as_double() == doctest::Approx(8.355).epsilon(1e-3));
+    CHECK(s.kind() == "structure");
+}
+
+TEST_CASE("advance: sub-steps, progress ticks, outputs on the vertices, iterations") {
+    StructureSolver s;
+    s.init(request(coupled_scene()));
+    Progress p;
+    const AdvanceReply r = s.advance(window(0.0, 2e-3, 4, forces(s, 1.0)), p);
+    CHECK(r.t == 2e-3);
+    CHECK(r.substeps == 4);
+    CHECK(p.steps.load() == 4);
+    CHECK(r.solver_iterations == 4);
+    CHECK(array(r.outputs, "displacement").shape == std::vector<std::uint64_t>{22, 2});
+    CHECK(array(r.outputs, "velocity").shape == std::vector<std::uint64_t>{22, 2});
+    CHECK(array(r.outputs, "displacement")(21, 1) < 0.0);  // pushed down, tip moved down
+
+    // substeps = 0: the solver chooses ceil(dt / dt_wanted).
+    const double dt = 3.5 * s.dt_wanted();
+    const AdvanceReply r2 = s.advance(window(r.t, dt, 0), p);
+    CHECK(r2.substeps == 4);
+    CHECK(r2.t == doctest::Approx(r.t + dt).epsilon(1e-15));
+}
+
+TEST_CASE("vertex forces act like the same nodal loads applied directly") {
+    // A uniform downward vertex force f on every one of the 22 vertices equals 2 f per node. Backward
+    // Euler, because it does not use the initial acceleration, which differs: the scene's loads enter
+    // it at t0, the interface forces (not yet known at init) do not.
+    StructureSolver s;
+    Value scene = coupled_scene();
+    set(scene, "time.integrator", Value("backward_euler"));
+    s.init(request(scene));
+    F64Array f = F64Array::zeros(22, 2);
+    for (std::size_t i = 0; i < 22; ++i) f(i, 1) = -5.0;
+    Progress p;
+    s.advance(window(0.0, 1e-3, 2, Fields{{"force", f}}), p);
+
+    Value::Array loads;
+    for (int k = 0; k <= 10; ++k) loads.push_back(point_load(k * L / 10, 0, 0, -10.0));
+    set(scene, "point_loads", Value(loads));
+    StructureSolver direct;
+    direct.init(request(scene));
+    direct.advance(window(0.0, 1e-3, 2), p);
+    CHECK((s.dynamics().state().u - direct.dynamics().state().u).norm() <= 1e-13 * direct.dynamics().state().u.norm());
+}
+
+TEST_CASE("linear formulation factorizes once while dt stays the same") {
+    StructureSolver s;
+    s.init(request(coupled_scene()));
+    Progress p;
+    double t = 0;
+    for (int k = 0; k < 10; ++k) t = s.advance(window(t, 1e-3, 2, forces(s, 1.0)), p).t;
+    CHECK(s.dynamics().factorizations() == 1);
+    t = s.advance(window(t, 1e-3, 3), p).t;  // new sub-step size
+    CHECK(s.dynamics().factorizations() == 2);
+    s.advance(window(t, 1.5e-3, 3), p);  // back to 0.5 ms sub-steps: a new factorization, 1 entry cache
+    CHECK(s.dynamics().factorizations() == 3);
+}
+
+TEST_CASE("save / restore: repeating a window gives identical numbers (implicit coupling)") {
+    for (const char* formulation : {"linear", "corotational"}) {
+        StructureSolver s;
+        s.init(request(coupled_scene(formulation)));
+        Progress p;
+        s.advance(window(0.0, 2e-3, 2, forces(s, 50.0)), p);
+        s.save();
+        const AdvanceReply first = s.advance(window(2e-3, 2e-3, 2, forces(s, 80.0)), p);
+        s.restore();
+        s.advance(window(2e-3, 2e-3, 2, forces(s, 10.0)), p);  // another coupling iterate
+        s.restore();
+        const AdvanceReply again = s.advance(window(2e-3, 2e-3, 2, forces(s, 80.0)), p);
+        CHECK(array(first.outputs, "displacement") == array(again.outputs, "displacement"));
+        CHECK(array(first.outputs, "velocity") == array(again.outputs, "velocity"));
+    }
+}
+
+TEST_CASE("checkpoint -> init(state) resumes bit-identically") {
+    for (const char* formulation : {"linear", "corotational"}) {
+        Value scene = coupled_scene(formulation);
+        StructureSolver a;
+        a.init(request(scene));
+        Progress p;
+        double t = 0;
+        for (int k = 0; k < 5; ++k) t = a.advance(window(t, 1e-3, 2, forces(a, 40.0 + k)), p).t;
+        const auto blob = a.checkpoint();
+
+        StructureSolver b;
+        b.init(request(scene, blob));
+        for (int k = 0; k < 5; ++k) {
+            const AdvanceReply ra = a.advance(window(t, 1e-3, 2, forces(a, 60.0 - k)), p);
+            const AdvanceReply rb = b.advance(window(t, 1e-3, 2, forces(b, 60.0 - k)), p);
+            t = ra.t;
+            CHECK(ra.t == rb.t);
+            CHECK(array(ra.outputs, "displacement") == array(rb.outputs, "displacement"));
+        }
+        const Fields sa = a.snapshot(), sb = b.snapshot();
+        CHECK(array(sa, "displacement") == array(sb, "displacement"));
+        CHECK(array(sa, "velocity") == array(sb, "velocity"));
+        CHECK(array(sa, "energy") == array(sb, "energy"));
+
+        // A checkpoint of another mesh is refused.
+        Value other = scene;
+        set(other.as_table_mut()["members"].as_array_mut()[0], "n_elements", Value(11));
+        StructureSolver c;
+        CHECK(code_of([&] { c.init(request(other, blob)); }) == "bad_config");
+    }
+}
+
+TEST_CASE("snapshot fields") {
+    StructureSolver s;
+    s.init(request(coupled_scene()));
+    Progress p;
+    s.advance(window(0.0, 1e-3, 1, forces(s, 100.0)), p);
+    const Fields f = s.snapshot();
+    CHECK(array(f, "nodes").shape == std::vector<std::uint64_t>{11, 2});
+    CHECK(array(f, "displacement").shape == std::vector<std::uint64_t>{11, 3});
+    CHECK(array(f, "velocity").shape == std::vector<std::uint64_t>{11, 3});
+    CHECK(std::get<I32Array>(f.at("elements")).shape == std::vector<std::uint64_t>{10, 2});
+    const F64Array& e = array(f, "energy");
+    CHECK(e.shape == std::vector<std::uint64_t>{1, 3});
+    CHECK(e(0, 0) > 0);
+    CHECK(e(0, 1) > 0);
+    CHECK(e(0, 2) > 0);
+}
+
+TEST_CASE("errors carry the protocol's codes") {
+    Value bad = coupled_scene();
+    set(bad, "material.E", Value(-1.0));
+    StructureSolver s;
+    CHECK(code_of([&] { s.init(request(bad)); }) == "bad_config");
+
+    s.init(request(coupled_scene()));
+    Progress p;
+    CHECK(code_of([&] { s.advance(window(0.5, 1e-3, 1), p); }) == "internal");  // wrong window start
+    Fields nan = forces(s, 1.0);
+    std::get<F64Array>(nan["force"])(3, 0) = std::nan("");
+    CHECK(code_of([&] { s.advance(window(0.0, 1e-3, 1, nan), p); }) == "diverged");
+    F64Array huge = F64Array::zeros(22, 2);
+    huge(21, 1) = 1e300;
+    CHECK(code_of([&] { s.advance(window(0.0, 1e-3, 1, Fields{{"force", huge}}), p); }) == "diverged");
+
+    Value stiff = coupled_scene("corotational");
+    set(stiff, "newton.max_iterations", Value(2));
+    StructureSolver c;
+    c.init(request(stiff));
+    CHECK(code_of([&] { c.advance(window(0.0, 0.05, 1, forces(c, 5000.0)), p); }) == "not_converged");
+}
+
+TEST_CASE("structure alone: a slowly ramped tip load settles on the static deflection P L^3 / (3 EI)") {
+    // Standalone run under the scene's own time-varying load: ramp over 2 s, heavy Rayleigh damping
+    // (20 %), run to 4 s. Quasi-static up to a residual dynamic part well below 1 %.
+    Value s = beam(10);
+    Value load = point_load(L, 0, 0, -500.0);
+    set(load, "history", Value("ramp"));
+    set(load, "ramp_time", Value(2.0));
+    set(s, "point_loads", Value(Value::Array{load}));
+    set(s, "damping.model", Value("rayleigh"));
+    set(s, "damping.ratios", vec(0.2, 0.2));
+    set(s, "members", Value(Value::Array{table({{"start", vec(0, 0)}, {"end", vec(L, 0)}, {"n_elements", Value(10)},
+                                                {"wetted", Value(false)}})}));
+    set(s, "time.dt_max", Value(5e-3));
+    StructureSolver solver;
+    const InitReply r = solver.init(request(s));
+    CHECK(!r.interface);  // nothing wetted: no interface to publish
+    Progress p;
+    double t = 0;
+    while (t < 4.0 - 1e-9) t = solver.advance(window(t, 0.1, 0), p).t;
+    const double tip = std::get<F64Array>(solver.snapshot().at("displacement"))(10, 1);
+    const double want = -500.0 * L * L * L / (3 * EI);
+    MESSAGE("tip " << tip << " vs static " << want);
+    CHECK(rel(tip, want) <= 0.01);
+}
+}
