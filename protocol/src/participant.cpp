@@ -51,8 +51,13 @@ public:
     bool receive(zmq::message_t& out, int ms) {
         std::lock_guard lock(mutex_);
         zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
-        if (zmq::poll(&item, 1, std::chrono::milliseconds(ms)) <= 0) return false;
-        return static_cast<bool>(socket_.recv(out, zmq::recv_flags::dontwait));
+        try {
+            if (zmq::poll(&item, 1, std::chrono::milliseconds(ms)) <= 0) return false;
+            return static_cast<bool>(socket_.recv(out, zmq::recv_flags::dontwait));
+        } catch (const zmq::error_t& e) {
+            if (e.num() == EINTR) return false;  // a signal: the caller checks whether to stop
+            throw;
+        }
     }
 
 private:

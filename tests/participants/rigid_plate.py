@@ -346,8 +346,8 @@ def decode_array(a, where):
     if dtype not in ("f8", "i4") or not isinstance(dtype, str):
         raise bad("%s.dtype must be \"f8\" or \"i4\"" % where)
     if (not isinstance(shape, list) or not 1 <= len(shape) <= 4
-            or any(type(s) is not int or s < 1 for s in shape)):
-        raise bad("%s.shape must be an array of 1 to 4 positive ints" % where)
+            or any(type(s) is not int or s < 0 for s in shape)):
+        raise bad("%s.shape must be an array of 1 to 4 non-negative ints" % where)
     if not isinstance(data, bytes):
         raise bad("%s.data must be bin" % where)
     count = 1
@@ -544,7 +544,7 @@ class Participant:
             if not isinstance(env, dict):
                 raise bad("the envelope must be a map, got %s" % type(env).__name__)
             s = env.get("seq")
-            if type(s) is int and s > 0:
+            if type(s) is int and s >= 0:
                 seq = s
             type_ = env.get("type")
             check_keys(env, ENVELOPE_KEYS, "envelope")
@@ -553,8 +553,8 @@ class Participant:
                 raise bad("envelope v must be a positive int")
             if not isinstance(type_, str):
                 raise bad("envelope type must be a str")
-            if seq == 0:
-                raise bad("envelope seq must be a positive int")
+            if type(s) is not int or s < 0:
+                raise bad("envelope seq must be a non-negative int")
             if not isinstance(env["token"], str):
                 raise bad("envelope token must be a str")
             body = env["body"]

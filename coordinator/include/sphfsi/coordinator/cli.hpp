@@ -1,0 +1,5 @@
+#pragma once
+namespace sphfsi::coordinator {
+// The `sphfsi` command line; returns the exit status.
+int main_cli(int argc, char** argv);
+}  // namespace sphfsi::coordinator

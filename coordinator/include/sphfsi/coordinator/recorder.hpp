@@ -1,0 +1,59 @@
+#pragma once
+// One HDF5 file per run (layout in docs/record.md). Per-window rows are buffered and written with
+// every frame; the file is flushed after every frame so a run killed at any moment keeps every
+// completed frame. An XDMF sidecar lets ParaView open the fluid frames.
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sphfsi/coordinator/h5.hpp"
+#include "sphfsi/protocol/arrays.hpp"
+#include "sphfsi/protocol/value.hpp"
+
+namespace sphfsi::coordinator {
+
+struct RunMetadata {
+    std::string scene_file, scene_text, overrides, software_version, git_revision;
+    std::uint32_t protocol_version = 0;
+};
+
+class Recorder {
+public:
+    // Creates `file` (replacing it), or with `resume_at` reopens it and drops everything after that time.
+    Recorder(std::filesystem::path file, const RunMetadata& meta, std::optional<double> resume_at = std::nullopt);
+    ~Recorder();
+
+    void set_participant(const std::string& role, const std::string& software, const Value& info);
+    void set_interface(const protocol::InterfaceMesh& mesh);
+
+    // One coupling window: named scalar columns (the same names every call) and the interface state.
+    void append_window(const std::vector<std::pair<std::string, double>>& columns,
+                       const protocol::F64Array* displacement, const protocol::F64Array* force);
+    void append_frame(const std::string& role, double t, const protocol::Fields& fields);
+    void set_status(const std::string& status);  // "running", "completed", "failed: ...", "interrupted"
+    void set_number(const std::string& name, double value);  // a root attribute (totals, CPU use)
+    void set_text(const std::string& name, const std::string& value);
+    void flush();                                // writes buffered windows and flushes the file
+
+    std::size_t frames(const std::string& role) const;
+    const std::filesystem::path& file() const { return file_; }
+
+private:
+    void write_xdmf(const std::string& role);
+    h5::Series& series(const std::string& path, const std::vector<hsize_t>& row_shape, bool is_int, hsize_t chunk_rows);
+
+    std::filesystem::path file_;
+    h5::Handle h5_;
+    std::map<std::string, h5::Series> series_;
+    std::vector<std::string> window_columns_;
+    std::vector<std::vector<double>> window_buffer_;  // per column
+    std::vector<double> disp_buffer_, force_buffer_;
+    hsize_t interface_rows_buffered_ = 0;
+    std::uint64_t interface_vertices_ = 0;
+    std::map<std::string, std::vector<double>> frame_times_;
+};
+
+}  // namespace sphfsi::coordinator

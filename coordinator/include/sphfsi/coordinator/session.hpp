@@ -1,0 +1,51 @@
+#pragma once
+// The participants as the coupling schemes see them: ADVANCE / SAVE / RESTORE with timing, and the
+// interface state passed between them.
+#include <string>
+
+#include "sphfsi/coordinator/hub.hpp"
+#include "sphfsi/protocol/arrays.hpp"
+
+namespace sphfsi::coordinator {
+
+struct StepResult {
+    protocol::AdvanceReply reply;
+    double roundtrip_s = 0.0;  // wall time from sending ADVANCE to having the reply decoded
+};
+
+class Session {
+public:
+    explicit Session(Hub& hub) : hub_(hub) {}
+    std::uint64_t start_advance(const std::string& role, double t, double dt, std::uint32_t substeps,
+                                std::uint32_t iteration, protocol::Fields inputs);
+    StepResult finish_advance(const std::string& role, std::uint64_t seq);
+    StepResult advance(const std::string& role, double t, double dt, std::uint32_t substeps, std::uint32_t iteration,
+                       protocol::Fields inputs) {
+        return finish_advance(role, start_advance(role, t, dt, substeps, iteration, std::move(inputs)));
+    }
+    void save(const std::string& role);
+    void restore(const std::string& role);
+    Hub& hub() { return hub_; }
+
+private:
+    Hub& hub_;
+    std::map<std::string, std::chrono::steady_clock::time_point> started_;
+};
+
+// What travels between the two sides, as of the start of the current window.
+struct InterfaceState {
+    protocol::InterfaceMesh mesh;
+    protocol::F64Array displacement, velocity;  // structure's latest (n, 2)
+    protocol::F64Array previous_displacement;   // one window earlier, for the quadratic predictor
+    protocol::F64Array force;                   // fluid's latest (n, 2)
+    double previous_dt = 0.0;
+
+    void reset(const protocol::InterfaceMesh& m);
+    std::size_t vertices() const { return mesh.vertices.rows(); }
+};
+
+// Reads a named (n, 2) f8 output, or fails naming the participant and the field.
+const protocol::F64Array& vertex_field(const std::string& role, const protocol::Fields& fields, const std::string& name,
+                                       std::size_t vertices);
+
+}  // namespace sphfsi::coordinator

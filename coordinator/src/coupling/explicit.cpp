@@ -1,0 +1,88 @@
+// Explicit (loosely coupled) schemes: one pass per window, no iterations.
+#include "sphfsi/coordinator/coupling.hpp"
+
+namespace sphfsi::coordinator {
+using protocol::F64Array;
+using protocol::Fields;
+
+void predict(const std::string& kind, const InterfaceState& s, double dt, F64Array& d, F64Array& v) {
+    d = s.displacement;
+    v = s.velocity;
+    if (kind == "none") return;
+    if (kind == "linear" || s.previous_dt <= 0.0) {  // first-order: d + dt v
+        for (std::size_t i = 0; i < d.values.size(); ++i) d.values[i] += dt * s.velocity.values[i];
+        return;
+    }
+    // Second order (Piperno 1997): d + dt (3/2 v_n - 1/2 v_{n-1}), v_{n-1} from the last two displacements.
+    for (std::size_t i = 0; i < d.values.size(); ++i) {
+        double v_prev = (s.displacement.values[i] - s.previous_displacement.values[i]) / s.previous_dt;
+        d.values[i] += dt * (1.5 * s.velocity.values[i] - 0.5 * v_prev);
+    }
+}
+
+namespace {
+void accept_structure(InterfaceState& s, const StepResult& r, double dt) {
+    const auto n = s.vertices();
+    s.previous_displacement = s.displacement;
+    s.previous_dt = dt;
+    s.displacement = vertex_field("structure", r.reply.outputs, "displacement", n);
+    s.velocity = vertex_field("structure", r.reply.outputs, "velocity", n);
+}
+
+Fields kinematics(const F64Array& d, const F64Array& v) { return Fields{{"displacement", d}, {"velocity", v}}; }
+
+// Conventional serial staggered: fluid first on predicted kinematics, then the structure on the new forces.
+class SerialExplicit : public CouplingScheme {
+public:
+    SerialExplicit(Session& s, std::string predictor) : session_(s), predictor_(std::move(predictor)) {}
+    WindowOutcome run(const WindowPlan& p, InterfaceState& s) override {
+        F64Array d, v;
+        predict(predictor_, s, p.dt, d, v);
+        WindowOutcome o;
+        o.fluid = session_.advance("fluid", p.t, p.dt, p.fluid_substeps, 0, kinematics(d, v));
+        s.force = vertex_field("fluid", o.fluid.reply.outputs, "force", s.vertices());
+        o.structure = session_.advance("structure", p.t, p.dt, p.structure_substeps, 0, Fields{{"force", s.force}});
+        accept_structure(s, o.structure, p.dt);
+        return o;
+    }
+
+private:
+    Session& session_;
+    std::string predictor_;
+};
+
+// Both sides advance at once on the other's window-start data: the structure on the last forces,
+// the fluid on predicted kinematics. Half the latency of the serial scheme, one step more lag.
+class ParallelExplicit : public CouplingScheme {
+public:
+    ParallelExplicit(Session& s, std::string predictor) : session_(s), predictor_(std::move(predictor)) {}
+    WindowOutcome run(const WindowPlan& p, InterfaceState& s) override {
+        F64Array d, v;
+        predict(predictor_, s, p.dt, d, v);
+        auto fseq = session_.start_advance("fluid", p.t, p.dt, p.fluid_substeps, 0, kinematics(d, v));
+        auto sseq = session_.start_advance("structure", p.t, p.dt, p.structure_substeps, 0, Fields{{"force", s.force}});
+        WindowOutcome o;
+        o.fluid = session_.finish_advance("fluid", fseq);
+        o.structure = session_.finish_advance("structure", sseq);
+        s.force = vertex_field("fluid", o.fluid.reply.outputs, "force", s.vertices());
+        accept_structure(s, o.structure, p.dt);
+        return o;
+    }
+
+private:
+    Session& session_;
+    std::string predictor_;
+};
+}  // namespace
+
+std::unique_ptr<CouplingScheme> make_implicit_scheme(const Value& coupling, Session& session, Log log);
+
+std::unique_ptr<CouplingScheme> make_scheme(const Value& c, Session& session, Log log) {
+    const std::string& scheme = c.at("scheme").as_string();
+    const std::string& predictor = c.at("predictor").as_string();
+    if (scheme == "serial-explicit") return std::make_unique<SerialExplicit>(session, predictor);
+    if (scheme == "parallel-explicit") return std::make_unique<ParallelExplicit>(session, predictor);
+    return make_implicit_scheme(c, session, std::move(log));
+}
+
+}  // namespace sphfsi::coordinator

@@ -1,0 +1,44 @@
+#include <cmath>
+
+#include "sphfsi/coordinator/coupling.hpp"
+
+namespace sphfsi::coordinator {
+
+const char* window_rule_legend() {
+    return "0 = thesis (one fluid step; structure n = int(dt_f/dt_s)+1), 1 = multi-rate (several fluid steps), "
+           "2 = fixed (coupling.window_dt), 3 = fluid alone (to the next output), 4 = structure alone (its wanted step)";
+}
+
+Schedule::Schedule(const Value& c)
+    : rule_(c.at("window").as_string()), fixed_dt_(c.number_or("window_dt", 0.0)),
+      max_fluid_steps_(static_cast<int>(c.at("max_fluid_steps").as_int())) {}
+
+WindowPlan Schedule::next(double t, double fluid_dt, double structure_dt, double t_stop) const {
+    WindowPlan p;
+    p.t = t;
+    if (rule_ == "thesis") {
+        // The thesis couples every fluid step and sub-cycles the beam n = int(dt_SPH / dt_FEM,max) + 1 times.
+        p.rule = WindowRule::Thesis;
+        p.dt = fluid_dt;
+        p.fluid_substeps = 1;
+    } else if (rule_ == "multi-rate") {
+        p.rule = WindowRule::MultiRate;
+        p.dt = max_fluid_steps_ * fluid_dt;
+        p.fluid_substeps = 0;  // the fluid keeps its own CFL step inside the window
+    } else {
+        p.rule = WindowRule::Fixed;
+        p.dt = fixed_dt_;
+        p.fluid_substeps = 0;
+    }
+    if (t + p.dt >= t_stop * (1 - 1e-14) || t_stop - (t + p.dt) < 1e-9 * p.dt) {
+        p.clipped = t + p.dt > t_stop;
+        p.dt = t_stop - t;
+    }
+    if (p.rule == WindowRule::Thesis)
+        p.structure_substeps = static_cast<std::uint32_t>(std::floor(p.dt / structure_dt)) + 1;
+    else
+        p.structure_substeps = static_cast<std::uint32_t>(std::max(1.0, std::ceil(p.dt / structure_dt * (1 - 1e-12))));
+    return p;
+}
+
+}  // namespace sphfsi::coordinator

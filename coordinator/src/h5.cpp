@@ -1,0 +1,148 @@
+#include "sphfsi/coordinator/h5.hpp"
+
+#include <stdexcept>
+
+namespace sphfsi::coordinator::h5 {
+namespace {
+hid_t check(hid_t id, const std::string& what) {
+    if (id < 0) throw std::runtime_error("HDF5: cannot " + what);
+    return id;
+}
+void check(herr_t rc, const std::string& what, int) {
+    if (rc < 0) throw std::runtime_error("HDF5: cannot " + what);
+}
+Handle link_creation_props() {
+    Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose, "create link properties");
+    H5Pset_create_intermediate_group(lcpl.get(), 1);
+    return lcpl;
+}
+}  // namespace
+
+Handle::Handle(hid_t id, herr_t (*close)(hid_t), const std::string& what) : id_(check(id, what)), close_(close) {}
+
+Handle& Handle::operator=(Handle&& o) noexcept {
+    if (this != &o) {
+        reset();
+        id_ = o.id_;
+        close_ = o.close_;
+        o.id_ = -1;
+    }
+    return *this;
+}
+
+void Handle::reset() {
+    if (id_ >= 0 && close_) close_(id_);
+    id_ = -1;
+}
+
+Series::Series(hid_t parent, const std::string& path, std::vector<hsize_t> row_shape, bool is_int, hsize_t rows_per_chunk)
+    : row_shape_(std::move(row_shape)), is_int_(is_int) {
+    std::vector<hsize_t> dims{0}, maxdims{H5S_UNLIMITED}, chunk{rows_per_chunk};
+    for (hsize_t s : row_shape_) {
+        dims.push_back(s);
+        maxdims.push_back(s);
+        chunk.push_back(s ? s : 1);
+    }
+    Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), maxdims.data()), H5Sclose, "create space");
+    Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "create dataset properties");
+    H5Pset_chunk(dcpl.get(), static_cast<int>(chunk.size()), chunk.data());
+    H5Pset_shuffle(dcpl.get());
+    H5Pset_deflate(dcpl.get(), 1);  // cheap compression: frames are written while the run goes on
+    Handle lcpl = link_creation_props();
+    ds_ = Handle(H5Dcreate2(parent, path.c_str(), is_int ? H5T_STD_I32LE : H5T_IEEE_F64LE, space.get(), lcpl.get(),
+                            dcpl.get(), H5P_DEFAULT),
+                 H5Dclose, "create dataset " + path);
+}
+
+Series::Series(hid_t parent, const std::string& path) {
+    ds_ = Handle(H5Dopen2(parent, path.c_str(), H5P_DEFAULT), H5Dclose, "open dataset " + path);
+    Handle space(H5Dget_space(ds_.get()), H5Sclose, "get space");
+    int rank = H5Sget_simple_extent_ndims(space.get());
+    std::vector<hsize_t> dims(static_cast<std::size_t>(rank));
+    H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+    rows_ = dims[0];
+    row_shape_.assign(dims.begin() + 1, dims.end());
+    Handle type(H5Dget_type(ds_.get()), H5Tclose, "get type");
+    is_int_ = H5Tget_class(type.get()) == H5T_INTEGER;
+}
+
+void Series::append(const void* rows, hsize_t count) {
+    if (count == 0) return;
+    std::vector<hsize_t> dims{rows_ + count}, start{rows_}, n{count};
+    for (hsize_t s : row_shape_) {
+        dims.push_back(s);
+        start.push_back(0);
+        n.push_back(s);
+    }
+    check(H5Dset_extent(ds_.get(), dims.data()), "extend dataset", 0);
+    Handle file_space(H5Dget_space(ds_.get()), H5Sclose, "get space");
+    H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start.data(), nullptr, n.data(), nullptr);
+    Handle mem_space(H5Screate_simple(static_cast<int>(n.size()), n.data(), nullptr), H5Sclose, "create space");
+    check(H5Dwrite(ds_.get(), is_int_ ? H5T_NATIVE_INT32 : H5T_NATIVE_DOUBLE, mem_space.get(), file_space.get(), H5P_DEFAULT, rows),
+          "write rows", 0);
+    rows_ += count;
+}
+
+void Series::truncate(hsize_t rows) {
+    if (rows >= rows_) return;
+    std::vector<hsize_t> dims{rows};
+    for (hsize_t s : row_shape_) dims.push_back(s);
+    check(H5Dset_extent(ds_.get(), dims.data()), "truncate dataset", 0);
+    rows_ = rows;
+}
+
+Handle create_file(const std::string& path) {
+    return Handle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose, "create " + path);
+}
+
+Handle open_file_rw(const std::string& path) {
+    return Handle(H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT), H5Fclose, "open " + path);
+}
+
+void write_string(hid_t parent, const std::string& name, const std::string& text) {
+    Handle type(H5Tcopy(H5T_C_S1), H5Tclose, "copy type");
+    H5Tset_size(type.get(), H5T_VARIABLE);
+    H5Tset_cset(type.get(), H5T_CSET_UTF8);
+    Handle space(H5Screate(H5S_SCALAR), H5Sclose, "create space");
+    Handle lcpl = link_creation_props();
+    Handle ds(H5Dcreate2(parent, name.c_str(), type.get(), space.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
+              "create " + name);
+    const char* p = text.c_str();
+    check(H5Dwrite(ds.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, &p), "write " + name, 0);
+}
+
+void set_attribute(hid_t object, const std::string& name, const std::string& value) {
+    if (H5Aexists(object, name.c_str()) > 0) H5Adelete(object, name.c_str());
+    Handle type(H5Tcopy(H5T_C_S1), H5Tclose, "copy type");
+    H5Tset_size(type.get(), H5T_VARIABLE);
+    H5Tset_cset(type.get(), H5T_CSET_UTF8);
+    Handle space(H5Screate(H5S_SCALAR), H5Sclose, "create space");
+    Handle attr(H5Acreate2(object, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
+                "create attribute " + name);
+    const char* p = value.c_str();
+    check(H5Awrite(attr.get(), type.get(), &p), "write attribute " + name, 0);
+}
+
+void set_attribute(hid_t object, const std::string& name, double value) {
+    if (H5Aexists(object, name.c_str()) > 0) H5Adelete(object, name.c_str());
+    Handle space(H5Screate(H5S_SCALAR), H5Sclose, "create space");
+    Handle attr(H5Acreate2(object, name.c_str(), H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
+                "create attribute " + name);
+    check(H5Awrite(attr.get(), H5T_NATIVE_DOUBLE, &value), "write attribute " + name, 0);
+}
+
+bool exists(hid_t parent, const std::string& path) {
+    // Walk the path one link at a time: H5Lexists fails on missing intermediate groups.
+    std::string prefix;
+    std::size_t pos = 0;
+    while (pos <= path.size()) {
+        std::size_t slash = path.find('/', pos);
+        prefix = path.substr(0, slash);
+        if (!prefix.empty() && H5Lexists(parent, prefix.c_str(), H5P_DEFAULT) <= 0) return false;
+        if (slash == std::string::npos) break;
+        pos = slash + 1;
+    }
+    return true;
+}
+
+}  // namespace sphfsi::coordinator::h5

@@ -1,0 +1,224 @@
+#include "sphfsi/coordinator/hub.hpp"
+
+#include <algorithm>
+
+#include "sphfsi/protocol/codec.hpp"
+
+namespace sphfsi::coordinator {
+using namespace sphfsi::protocol;
+using Clock = std::chrono::steady_clock;
+
+volatile std::sig_atomic_t g_interrupted = 0;
+
+namespace {
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+std::string fmt_s(double s) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.1f s", s);
+    return buf;
+}
+}  // namespace
+
+Hub::Hub(std::string bind_endpoint, std::string token, HubTiming timing, Launcher* launcher, Log log)
+    : ctx_(1), socket_(ctx_, zmq::socket_type::router), token_(std::move(token)), timing_(timing),
+      launcher_(launcher), log_(std::move(log)) {
+    socket_.set(zmq::sockopt::linger, 0);
+    socket_.set(zmq::sockopt::router_mandatory, 1);  // sending to a vanished peer is an error, not a silent drop
+    socket_.set(zmq::sockopt::maxmsgsize, static_cast<int64_t>(DecodeLimits{}.max_bytes));
+    socket_.bind(bind_endpoint);
+    endpoint_ = socket_.get(zmq::sockopt::last_endpoint);
+    last_beat_sent_ = Clock::now();
+}
+
+void Hub::send_raw(const std::string& identity, const Message& m) {
+    auto start = Clock::now();
+    std::string bytes = encode(m);
+    try {
+        socket_.send(zmq::buffer(identity), zmq::send_flags::sndmore);
+        socket_.send(zmq::buffer(bytes), zmq::send_flags::none);
+    } catch (const zmq::error_t& e) {
+        auto it = identity_role_.find(identity);
+        if (it != identity_role_.end()) throw ParticipantFailure(it->second, "died", "cannot be reached: " + std::string(e.what()));
+        // a stranger that went away: nothing to do
+    }
+    messaging_s_ += seconds_since(start);
+}
+
+const std::string& Hub::identity_of(const std::string& role) const {
+    auto it = role_identity_.find(role);
+    if (it == role_identity_.end()) throw std::logic_error("no participant for role " + role);
+    return it->second;
+}
+
+std::uint64_t Hub::send(const std::string& role, MessageType type, Body body) {
+    Message m = make_message(type, ++seq_, token_, std::move(body));
+    m.version = version_;
+    send_raw(identity_of(role), m);
+    return m.seq;
+}
+
+Message Hub::await_reply(const std::string& role, std::uint64_t seq) {
+    while (true) {
+        auto& box = inbox_[role];
+        if (auto it = box.find(seq); it != box.end()) {
+            Message m = std::move(it->second);
+            box.erase(it);
+            if (m.type == MessageType::Error) {
+                const auto& e = m.as<ErrorReply>();
+                throw ParticipantFailure(role, e.code, "reported " + e.code + ": " + e.message);
+            }
+            return m;
+        }
+        pump(50);
+    }
+}
+
+void Hub::await_hellos(const std::vector<std::string>& roles) {
+    expected_ = roles;
+    auto start = Clock::now();
+    while (true) {
+        bool all = std::all_of(roles.begin(), roles.end(), [&](const std::string& r) { return peers_.count(r) > 0; });
+        if (all) return;
+        if (seconds_since(start) > timing_.startup_timeout_s)
+            for (const auto& r : roles)
+                if (!peers_.count(r))
+                    throw ParticipantFailure(r, "died", "did not connect within " + fmt_s(timing_.startup_timeout_s) +
+                                                            " (run.startup_timeout_s)");
+        pump(50);
+    }
+}
+
+void Hub::goodbye(double timeout_s) {
+    std::map<std::string, std::uint64_t> pending;
+    for (const auto& [role, peer] : peers_) {
+        try {
+            pending[role] = send(role, MessageType::Bye);
+        } catch (const std::exception&) {
+        }
+    }
+    auto start = Clock::now();
+    while (!pending.empty() && seconds_since(start) < timeout_s) {
+        try {
+            pump(20);
+        } catch (const std::exception&) {
+            // a participant that exits right after its ACK, or misbehaves now, changes nothing
+        }
+        for (auto it = pending.begin(); it != pending.end();) {
+            auto& box = inbox_[it->first];
+            if (box.count(it->second)) it = pending.erase(it);
+            else ++it;
+        }
+    }
+    peers_.clear();
+}
+
+void Hub::pump(int wait_ms) {
+    if (g_interrupted) throw Interrupted();
+    zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
+    try {
+        zmq::poll(&item, 1, std::chrono::milliseconds(wait_ms));
+    } catch (const zmq::error_t& e) {
+        if (e.num() != EINTR) throw;
+        if (g_interrupted) throw Interrupted();  // a signal woke us: SIGINT/SIGTERM asks to stop
+    }
+    while (true) {
+        zmq::message_t identity, payload;
+        if (!socket_.recv(identity, zmq::recv_flags::dontwait)) break;
+        if (!identity.more()) continue;  // cannot happen on a ROUTER; ignore defensively
+        (void)socket_.recv(payload, zmq::recv_flags::dontwait);
+        bool multipart = payload.more();
+        while (payload.more()) {  // drain extra frames of a multipart message
+            zmq::message_t extra;
+            if (!socket_.recv(extra, zmq::recv_flags::dontwait)) break;
+            if (!extra.more()) break;
+        }
+        std::string id(static_cast<const char*>(identity.data()), identity.size());
+        auto known = identity_role_.find(id);
+        if (known == identity_role_.end()) {
+            handle_stranger(id, payload);
+            continue;
+        }
+        const std::string& role = known->second;
+        auto start = Clock::now();
+        Message m;
+        try {
+            if (multipart) throw ProtocolError("bad_message", "message has more than one frame");
+            m = decode(payload.data(), payload.size());
+        } catch (const ProtocolError& e) {
+            send_raw(id, make_message(MessageType::Error, 0, token_, ErrorReply{e.code(), e.what(), 0}));
+            throw ParticipantFailure(role, "garbage", "sent a malformed message (" + e.code() + "): " + e.what());
+        }
+        messaging_s_ += seconds_since(start);
+        if (m.token != token_) throw ParticipantFailure(role, "garbage", "sent a message with a wrong token");
+        if (m.version != version_)
+            throw ParticipantFailure(role, "garbage", "switched protocol version to " + std::to_string(m.version));
+        PeerInfo& peer = peers_[role];
+        peer.last_seen = Clock::now();
+        if (m.type == MessageType::Heartbeat) {
+            peer.progress = m.as<Heartbeat>().progress;
+            continue;
+        }
+        inbox_[role][m.seq] = std::move(m);
+    }
+    check_liveness();
+}
+
+void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) {
+    auto refuse = [&](std::uint64_t seq, const std::string& code, const std::string& why) {
+        log_("refused a connection: " + why);
+        Message e = make_message(MessageType::Error, seq, token_, ErrorReply{code, why, seq});
+        send_raw(id, e);
+    };
+    Message m;
+    try {
+        m = decode(payload.data(), payload.size());
+    } catch (const ProtocolError& e) {
+        return refuse(0, e.code(), std::string("malformed first message: ") + e.what());
+    }
+    if (m.type != MessageType::Hello) return refuse(m.seq, "refused", "first message must be HELLO, got " + std::string(to_string(m.type)));
+    if (m.token != token_) return refuse(m.seq, "bad_token", "HELLO carries a token that is not this run's (stale or stray participant)");
+    const auto& h = m.as<Hello>();
+    std::uint32_t lo = std::max(h.version_min, kOldestSupportedVersion), hi = std::min(h.version_max, kProtocolVersion);
+    if (lo > hi)
+        return refuse(m.seq, "version_mismatch",
+                      "participant '" + h.name + "' speaks protocol " + std::to_string(h.version_min) + ".." +
+                          std::to_string(h.version_max) + ", the coordinator " + std::to_string(kOldestSupportedVersion) +
+                          ".." + std::to_string(kProtocolVersion));
+    if (std::find(expected_.begin(), expected_.end(), h.name) == expected_.end())
+        return refuse(m.seq, "refused", "the scene has no participant named '" + h.name + "'");
+    if (peers_.count(h.name)) return refuse(m.seq, "refused", "'" + h.name + "' is already connected");
+    version_ = hi;
+    identity_role_[id] = h.name;
+    role_identity_[h.name] = id;
+    PeerInfo& p = peers_[h.name];
+    p.role = h.name;
+    p.software = h.software;
+    p.pid = h.pid;
+    p.last_seen = Clock::now();
+    Message w = make_message(MessageType::Welcome, m.seq, token_, Welcome{hi, timing_.heartbeat_s, timing_.timeout_s});
+    w.version = hi;
+    send_raw(id, w);
+    log_(h.name + " connected: " + h.software + " (pid " + std::to_string(h.pid) + ", protocol " + std::to_string(hi) + ")");
+}
+
+void Hub::check_liveness() {
+    if (launcher_)
+        if (auto exited = launcher_->poll_exited())
+            throw ParticipantFailure(exited->first, "died", exited->second);
+    for (const auto& [role, peer] : peers_) {
+        double silent = seconds_since(peer.last_seen);
+        if (silent > timing_.timeout_s)
+            throw ParticipantFailure(role, "hung", "has been silent for " + fmt_s(silent) +
+                                                       " (no reply, no heartbeat; run.timeout_s = " + fmt_s(timing_.timeout_s) + ")");
+    }
+    if (seconds_since(last_beat_sent_) >= timing_.heartbeat_s) {
+        last_beat_sent_ = Clock::now();
+        for (const auto& [role, peer] : peers_) {
+            Message m = make_message(MessageType::Heartbeat, ++seq_, token_, Heartbeat{0});
+            m.version = version_;
+            send_raw(identity_of(role), m);
+        }
+    }
+}
+
+}  // namespace sphfsi::coordinator

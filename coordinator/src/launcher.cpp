@@ -1,0 +1,92 @@
+#include "sphfsi/coordinator/launcher.hpp"
+
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <stdexcept>
+#include <thread>
+
+namespace sphfsi::coordinator {
+
+std::string own_directory() {
+    return std::filesystem::read_symlink("/proc/self/exe").parent_path().string();
+}
+
+std::string describe_exit(int status) {
+    if (WIFEXITED(status)) return "exited with status " + std::to_string(WEXITSTATUS(status));
+    if (WIFSIGNALED(status))
+        return "was killed by signal " + std::to_string(WTERMSIG(status)) + " (" + strsignal(WTERMSIG(status)) + ")";
+    return "stopped (status " + std::to_string(status) + ")";
+}
+
+Launcher::~Launcher() { stop_all(0.0); }
+
+void Launcher::start(const std::string& role, const std::vector<std::string>& argv, const std::string& token) {
+    if (argv.empty()) throw std::invalid_argument("no program for " + role);
+    std::vector<char*> args;
+    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    std::string env_token = "SPHFSI_TOKEN=" + token;
+    pid_t parent = ::getpid();
+    pid_t pid = ::fork();
+    if (pid < 0) throw std::runtime_error("cannot start " + role + ": fork failed: " + std::strerror(errno));
+    if (pid == 0) {
+        // Die with the coordinator, even if it is killed with SIGKILL.
+        ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+        if (::getppid() != parent) ::_exit(127);
+        // Own process group: Ctrl-C reaches the coordinator only, which then shuts the run down in order.
+        ::setpgid(0, 0);
+        ::putenv(env_token.data());
+        ::execvp(args[0], args.data());
+        std::fprintf(stderr, "[%s] cannot execute %s: %s\n", role.c_str(), args[0], std::strerror(errno));
+        ::_exit(127);
+    }
+    children_[role] = pid;
+}
+
+std::optional<std::pair<std::string, std::string>> Launcher::poll_exited() {
+    for (auto it = children_.begin(); it != children_.end(); ++it) {
+        int status = 0;
+        pid_t r = ::waitpid(it->second, &status, WNOHANG);
+        if (r == it->second) {
+            std::string role = it->first;
+            children_.erase(it);
+            return std::make_pair(role, describe_exit(status));
+        }
+    }
+    return std::nullopt;
+}
+
+bool Launcher::running(const std::string& role) const { return children_.count(role) > 0; }
+
+void Launcher::stop_all(double grace_s) {
+    using namespace std::chrono;
+    auto wait_all = [this](double seconds) {
+        auto until = steady_clock::now() + duration<double>(seconds);
+        do {
+            for (auto it = children_.begin(); it != children_.end();) {
+                int status = 0;
+                if (::waitpid(it->second, &status, WNOHANG) == it->second) it = children_.erase(it);
+                else ++it;
+            }
+            if (children_.empty()) return;
+            std::this_thread::sleep_for(milliseconds(10));
+        } while (steady_clock::now() < until);
+    };
+    wait_all(grace_s);
+    for (auto& [role, pid] : children_) ::kill(pid, SIGTERM);
+    wait_all(1.0);
+    for (auto& [role, pid] : children_) {
+        ::kill(pid, SIGCONT);  // a stopped (SIGSTOP) child cannot act on SIGTERM; SIGKILL works regardless
+        ::kill(pid, SIGKILL);
+    }
+    for (auto& [role, pid] : children_) ::waitpid(pid, nullptr, 0);
+    children_.clear();
+}
+
+}  // namespace sphfsi::coordinator

@@ -1,0 +1,228 @@
+#include "sphfsi/coordinator/recorder.hpp"
+
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace sphfsi::coordinator {
+namespace {
+std::vector<hsize_t> row_shape_of(const std::vector<std::uint64_t>& shape) { return {shape.begin(), shape.end()}; }
+
+void write_value_attributes(hid_t object, const std::string& prefix, const Value& v) {
+    if (!v.is_table()) return;
+    for (const auto& [k, x] : v.as_table()) {
+        std::string name = prefix.empty() ? k : prefix + "." + k;
+        if (x.is_number()) h5::set_attribute(object, name, x.as_double());
+        else if (x.is_string()) h5::set_attribute(object, name, x.as_string());
+        else if (x.is_bool()) h5::set_attribute(object, name, x.as_bool() ? 1.0 : 0.0);
+        else if (x.is_table()) write_value_attributes(object, name, x);
+    }
+}
+}  // namespace
+
+Recorder::Recorder(std::filesystem::path file, const RunMetadata& meta, std::optional<double> resume_at)
+    : file_(std::move(file)) {
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // we report HDF5 failures ourselves
+    if (!resume_at) {
+        h5_ = h5::create_file(file_.string());
+        h5::write_string(h5_.get(), "scene", meta.scene_text);
+        h5::set_attribute(h5_.get(), "scene_file", meta.scene_file);
+        h5::set_attribute(h5_.get(), "overrides", meta.overrides);
+        h5::set_attribute(h5_.get(), "software_version", meta.software_version);
+        h5::set_attribute(h5_.get(), "git_revision", meta.git_revision);
+        h5::set_attribute(h5_.get(), "protocol_version", static_cast<double>(meta.protocol_version));
+        set_status("running");
+        flush();
+        return;
+    }
+    h5_ = h5::open_file_rw(file_.string());
+    // Drop what was written after the checkpoint, so the resumed run continues one clean history.
+    auto cut = [&](const std::string& time_path, const std::vector<std::string>& paths) {
+        if (!h5::exists(h5_.get(), time_path)) return;
+        h5::Series time(h5_.get(), time_path);
+        std::vector<double> t(time.rows());
+        if (!t.empty()) {
+            h5::Handle ds(H5Dopen2(h5_.get(), time_path.c_str(), H5P_DEFAULT), H5Dclose, "open " + time_path);
+            H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, t.data());
+        }
+        hsize_t keep = 0;
+        while (keep < t.size() && t[keep] <= *resume_at * (1 + 1e-12)) ++keep;
+        for (const auto& p : paths)
+            if (h5::exists(h5_.get(), p)) h5::Series(h5_.get(), p).truncate(keep);
+        return;
+    };
+    auto children = [&](const std::string& group) {
+        std::vector<std::string> names;
+        if (!h5::exists(h5_.get(), group)) return names;
+        h5::Handle g(H5Gopen2(h5_.get(), group.c_str(), H5P_DEFAULT), H5Gclose, "open " + group);
+        hsize_t n = 0;
+        H5Gget_num_objs(g.get(), &n);
+        for (hsize_t i = 0; i < n; ++i) {
+            char name[256];
+            H5Gget_objname_by_idx(g.get(), i, name, sizeof name);
+            names.push_back(group + "/" + name);
+        }
+        return names;
+    };
+    std::vector<std::string> window_paths = children("/windows");
+    for (const auto& p : children("/interface"))
+        if (p != "/interface/vertices" && p != "/interface/cells") window_paths.push_back(p);
+    cut("/windows/t", window_paths);
+    for (const auto& role_group : children("/frames")) cut(role_group + "/time", children(role_group));
+    set_status("running (resumed)");
+    flush();
+}
+
+Recorder::~Recorder() {
+    try {
+        flush();
+    } catch (...) {
+    }
+}
+
+h5::Series& Recorder::series(const std::string& path, const std::vector<hsize_t>& row_shape, bool is_int, hsize_t chunk_rows) {
+    auto it = series_.find(path);
+    if (it != series_.end()) return it->second;
+    if (h5::exists(h5_.get(), path)) return series_.emplace(path, h5::Series(h5_.get(), path)).first->second;
+    return series_.emplace(path, h5::Series(h5_.get(), path, row_shape, is_int, chunk_rows)).first->second;
+}
+
+void Recorder::set_participant(const std::string& role, const std::string& software, const Value& info) {
+    std::string path = "/participants/" + role;
+    if (!h5::exists(h5_.get(), path)) {
+        h5::Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose, "lcpl");
+        H5Pset_create_intermediate_group(lcpl.get(), 1);
+        h5::Handle g(H5Gcreate2(h5_.get(), path.c_str(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT), H5Gclose, "create " + path);
+    }
+    h5::Handle g(H5Gopen2(h5_.get(), path.c_str(), H5P_DEFAULT), H5Gclose, "open " + path);
+    h5::set_attribute(g.get(), "software", software);
+    write_value_attributes(g.get(), "", info);
+}
+
+void Recorder::set_interface(const protocol::InterfaceMesh& mesh) {
+    interface_vertices_ = mesh.vertices.rows();
+    if (h5::exists(h5_.get(), "/interface/vertices")) return;
+    series("/interface/vertices", {2}, false, mesh.vertices.rows()).append(mesh.vertices.values.data(), mesh.vertices.rows());
+    series("/interface/cells", {4}, true, mesh.cells.rows()).append(mesh.cells.values.data(), mesh.cells.rows());
+}
+
+void Recorder::append_window(const std::vector<std::pair<std::string, double>>& columns,
+                             const protocol::F64Array* displacement, const protocol::F64Array* force) {
+    if (window_columns_.empty()) {
+        for (const auto& [name, v] : columns) window_columns_.push_back(name);
+        window_buffer_.resize(window_columns_.size());
+    }
+    if (columns.size() != window_columns_.size()) throw std::logic_error("recorder: window columns changed");
+    for (std::size_t i = 0; i < columns.size(); ++i) window_buffer_[i].push_back(columns[i].second);
+    if (displacement && force && interface_vertices_) {
+        disp_buffer_.insert(disp_buffer_.end(), displacement->values.begin(), displacement->values.end());
+        force_buffer_.insert(force_buffer_.end(), force->values.begin(), force->values.end());
+        ++interface_rows_buffered_;
+    }
+    // Bound memory between frames: write out long stretches without a frame.
+    if (window_buffer_[0].size() >= 4096) flush();
+}
+
+void Recorder::append_frame(const std::string& role, double t, const protocol::Fields& fields) {
+    std::string group = "/frames/" + role + "/";
+    for (const auto& [name, field] : fields) {
+        std::visit(
+            [&](const auto& a) {
+                using T = typename std::decay_t<decltype(a)>::value_type;
+                bool is_int = std::is_same_v<T, std::int32_t>;
+                h5::Series& s = series(group + name, row_shape_of(a.shape), is_int, 1);
+                if (s.row_shape() != row_shape_of(a.shape) || s.is_int() != is_int)
+                    throw std::runtime_error(role + " changed the shape or type of field '" + name + "' between frames");
+                s.append(a.values.data(), 1);
+            },
+            field);
+    }
+    series(group + "time", {}, false, 256).append(&t, 1);
+    frame_times_[role].push_back(t);
+    flush();
+    if (fields.count("position")) write_xdmf(role);
+}
+
+std::size_t Recorder::frames(const std::string& role) const {
+    auto it = series_.find("/frames/" + role + "/time");
+    return it == series_.end() ? 0 : it->second.rows();
+}
+
+void Recorder::set_status(const std::string& status) {
+    h5::set_attribute(h5_.get(), "status", status);
+    H5Fflush(h5_.get(), H5F_SCOPE_GLOBAL);
+}
+
+void Recorder::set_number(const std::string& name, double value) { h5::set_attribute(h5_.get(), name, value); }
+void Recorder::set_text(const std::string& name, const std::string& value) { h5::set_attribute(h5_.get(), name, value); }
+
+void Recorder::flush() {
+    if (!window_columns_.empty() && !window_buffer_[0].empty()) {
+        for (std::size_t i = 0; i < window_columns_.size(); ++i) {
+            series("/windows/" + window_columns_[i], {}, false, 4096).append(window_buffer_[i].data(), window_buffer_[i].size());
+            window_buffer_[i].clear();
+        }
+    }
+    if (interface_rows_buffered_) {
+        series("/interface/displacement", {interface_vertices_, 2}, false, 64).append(disp_buffer_.data(), interface_rows_buffered_);
+        series("/interface/force", {interface_vertices_, 2}, false, 64).append(force_buffer_.data(), interface_rows_buffered_);
+        disp_buffer_.clear();
+        force_buffer_.clear();
+        interface_rows_buffered_ = 0;
+    }
+    H5Fflush(h5_.get(), H5F_SCOPE_GLOBAL);
+}
+
+// XDMF 3 sidecar: a temporal collection of point clouds read straight from the HDF5 datasets.
+void Recorder::write_xdmf(const std::string& role) {
+    const std::string group = "/frames/" + role + "/";
+    const auto& pos = series_.at(group + "position");
+    const hsize_t n = pos.row_shape().empty() ? 0 : pos.row_shape()[0];
+    const std::string h5name = file_.filename().string();
+    // One row of a (frames, n, comps) dataset as an (n, comps) array.
+    auto slab = [&](std::ostringstream& x, hsize_t row, const std::string& field, hsize_t comps, bool is_int) {
+        x << "<DataItem ItemType=\"HyperSlab\" Dimensions=\"" << n;
+        if (comps > 1) x << ' ' << comps;
+        x << "\">\n<DataItem Dimensions=\"3 3\" Format=\"XML\">" << row << " 0 0 1 1 1 1 " << n << ' ' << comps
+          << "</DataItem>\n<DataItem Dimensions=\"" << pos.rows() << ' ' << n << ' ' << comps << "\" NumberType=\""
+          << (is_int ? "Int\" Precision=\"4" : "Float\" Precision=\"8") << "\" Format=\"HDF\">" << h5name << ':' << group
+          << field << "</DataItem>\n</DataItem>\n";
+    };
+    std::ostringstream x;
+    x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n<Domain>\n<Grid Name=\"" << role
+      << "\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+    const auto& times = frame_times_[role];
+    const hsize_t first = pos.rows() - times.size();  // frames written before a resume are not in frame_times_
+    for (std::size_t k = 0; k < times.size(); ++k) {
+        const hsize_t row = first + k;
+        x << "<Grid Name=\"frame" << row << "\" GridType=\"Uniform\">\n<Time Value=\"" << times[k]
+          << "\"/>\n<Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n
+          << "\"/>\n<Geometry GeometryType=\"XY\">\n";
+        slab(x, row, "position", 2, false);
+        x << "</Geometry>\n";
+        for (const auto& [path, s] : series_) {
+            if (path.rfind(group, 0) != 0) continue;
+            const std::string field = path.substr(group.size());
+            if (field == "position" || field == "time" || s.row_shape().empty() || s.row_shape()[0] != n) continue;
+            const hsize_t comps = s.row_shape().size() > 1 ? s.row_shape()[1] : 1;
+            // XDMF's Vector means 3 components; 2D vectors go in as Matrix (n x 2), read as 2-component arrays.
+            x << "<Attribute Name=\"" << field << "\" AttributeType=\""
+              << (comps == 1 ? "Scalar" : comps == 3 ? "Vector" : "Matrix") << "\" Center=\"Node\">\n";
+            slab(x, row, field, comps, s.is_int());
+            x << "</Attribute>\n";
+        }
+        x << "</Grid>\n";
+    }
+    x << "</Grid>\n</Domain>\n</Xdmf>\n";
+    auto out = file_;
+    out.replace_extension(".xdmf");
+    auto tmp = out;
+    tmp += ".tmp";
+    {
+        std::ofstream f(tmp);
+        f << x.str();
+    }
+    std::filesystem::rename(tmp, out);  // atomic: ParaView never reads half a file
+}
+
+}  // namespace sphfsi::coordinator

@@ -1,0 +1,382 @@
+#include "sphfsi/coordinator/run.hpp"
+
+#include <sys/resource.h>
+
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <fstream>
+#include <iostream>
+#include <optional>
+#include <random>
+
+#include "sphfsi/coordinator/checkpoint.hpp"
+#include "sphfsi/coordinator/coupling.hpp"
+#include "sphfsi/coordinator/hub.hpp"
+#include "sphfsi/coordinator/launcher.hpp"
+#include "sphfsi/coordinator/progress.hpp"
+#include "sphfsi/coordinator/recorder.hpp"
+#include "sphfsi/coordinator/scene.hpp"
+#include "sphfsi/coordinator/version.hpp"
+#include "sphfsi/coordinator/watchpoints.hpp"
+
+namespace sphfsi::coordinator {
+using namespace sphfsi::protocol;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+void on_signal(int) { g_interrupted = 1; }
+
+std::string random_token() {
+    std::random_device rd;  // /dev/urandom on Linux
+    static const char* hex = "0123456789abcdef";
+    std::string t;
+    for (int i = 0; i < 32; ++i) t += hex[rd() % 16];
+    return t;
+}
+
+double cpu_seconds() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return u.ru_utime.tv_sec + u.ru_stime.tv_sec + 1e-6 * (u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+// Prescribed interface load of a structure run alone: the total force spread evenly over the vertices,
+// evaluated at the window midpoint (second-order accurate for smooth profiles).
+F64Array prescribed_force(const Value& load, std::size_t vertices, double t_mid) {
+    auto f = load.at("force").as_doubles();
+    const std::string& profile = load.at("profile").as_string();
+    double s = 1.0;
+    if (profile == "ramp") s = std::min(1.0, t_mid / load.at("ramp_time").as_double());
+    if (profile == "sine") s = std::sin(2 * M_PI * load.at("frequency").as_double() * t_mid);
+    F64Array a = F64Array::zeros(vertices, 2);
+    for (std::size_t i = 0; i < vertices; ++i) {
+        a(i, 0) = s * f[0] / static_cast<double>(vertices);
+        a(i, 1) = s * f[1] / static_cast<double>(vertices);
+    }
+    return a;
+}
+
+class Runner {
+public:
+    explicit Runner(const RunOptions& o) : opt_(o) {}
+    int execute();
+
+private:
+    void log(const std::string& s) {
+        progress_finish();
+        std::cerr << "sphfsi: " << s << std::endl;
+        if (log_file_) log_file_ << s << std::endl;
+    }
+    void progress_finish() {
+        if (progress_) progress_->finish();
+    }
+    std::vector<std::string> program_for(const std::string& role) const;
+    void initialise(std::optional<Checkpoint>& resume);
+    void loop();
+    WindowOutcome advance_alone(const WindowPlan& plan);
+    WindowPlan plan_window(double t_stop) const;
+    void record_window(const WindowPlan& plan, const WindowOutcome& o, double wall_s);
+    void snapshot_all();
+    void checkpoint();
+
+    RunOptions opt_;
+    Scene scene_;
+    std::ofstream log_file_;
+    std::unique_ptr<Launcher> launcher_;
+    std::unique_ptr<Hub> hub_;
+    std::unique_ptr<Session> session_;
+    std::unique_ptr<Recorder> recorder_;
+    std::unique_ptr<Watchpoints> watchpoints_;
+    std::unique_ptr<CouplingScheme> scheme_;
+    std::unique_ptr<Schedule> schedule_;
+    std::unique_ptr<ProgressDisplay> progress_;
+    std::vector<std::string> roles_;
+    bool fluid_ = false, structure_ = false, coupled_ = false;
+    InterfaceState iface_;
+    double t_ = 0.0, t0_ = 0.0, end_ = 0.0, output_dt_ = 0.0, checkpoint_dt_ = 0.0;
+    double fluid_dt_ = 0.0, structure_dt_ = 0.0;
+    std::uint64_t output_index_ = 0, checkpoint_index_ = 0, windows_ = 0, steps_ = 0;
+    double messaging_total_s_ = 0.0, wall_in_loop_s_ = 0.0;
+};
+
+std::vector<std::string> Runner::program_for(const std::string& role) const {
+    std::vector<std::string> argv;
+    if (auto custom = scene_.custom_program(role)) argv = *custom;
+    else argv = {own_directory() + "/sphfsi-" + role};
+    argv.insert(argv.end(), {"--connect", hub_->endpoint(), "--name", role});
+    return argv;
+}
+
+int Runner::execute() {
+    std::optional<Checkpoint> resume;
+    if (opt_.resume) {
+        resume = read_checkpoint(opt_.out_dir / "checkpoint.bin");
+        auto tmp = opt_.out_dir / "resumed_scene.toml";
+        { std::ofstream(tmp) << resume->scene_text; }
+        scene_ = load_scene(tmp, resume->overrides);
+        scene_.file = resume->scene_file;  // relative program paths resolve against the original scene
+        std::filesystem::remove(tmp);
+    } else {
+        scene_ = load_scene(opt_.scene, opt_.overrides);
+        scene_.file = std::filesystem::absolute(opt_.scene);
+    }
+    std::filesystem::create_directories(opt_.out_dir);  // only once the scene is known to be valid
+    log_file_.open(opt_.out_dir / "run.log", resume ? std::ios::app : std::ios::trunc);
+    const Value& run = scene_.section("run");
+    fluid_ = scene_.has("fluid");
+    structure_ = scene_.has("structure");
+    coupled_ = fluid_ && structure_;
+    if (structure_) roles_.push_back("structure");  // INIT order: the structure publishes the interface first
+    if (fluid_) roles_.push_back("fluid");
+    end_ = run.at("end_time").as_double();
+    output_dt_ = run.number_or("output_interval", end_ / 100);
+    checkpoint_dt_ = run.number_or("checkpoint_interval", 10 * output_dt_);
+
+    std::signal(SIGINT, on_signal);
+    std::signal(SIGTERM, on_signal);
+    std::signal(SIGPIPE, SIG_IGN);
+
+    RunMetadata meta{scene_.file.string(), scene_.text, "", kSoftwareVersion, kGitRevision, kProtocolVersion};
+    for (const auto& o : scene_.overrides) meta.overrides += (meta.overrides.empty() ? "" : " ") + o;
+    if (resume) meta.overrides = "";
+    recorder_ = std::make_unique<Recorder>(opt_.out_dir / "record.h5", meta,
+                                           resume ? std::optional<double>(resume->t) : std::nullopt);
+    std::string status = "completed";
+    int code = 0;
+    try {
+        initialise(resume);
+        loop();
+    } catch (const ParticipantFailure& e) {
+        log(std::string("error: ") + e.what());
+        status = std::string("failed: ") + e.what();
+        code = 1;
+    } catch (const Interrupted&) {
+        log("interrupted at t = " + std::to_string(t_) + " s; the record holds everything up to here");
+        status = "interrupted at t = " + std::to_string(t_) + " s";
+        code = 130;
+    } catch (const std::exception& e) {
+        log(std::string("error: ") + e.what());
+        status = std::string("failed: ") + e.what();
+        code = 1;
+    }
+    progress_finish();
+    if (hub_) hub_->goodbye(code == 0 ? 5.0 : 1.0);
+    if (launcher_) launcher_->stop_all(code == 0 ? 2.0 : 0.5);
+    double cpu = cpu_seconds();
+    recorder_->set_number("coordinator_cpu_s", cpu);
+    recorder_->set_number("wall_s", wall_in_loop_s_);
+    recorder_->set_number("messaging_and_waiting_s", messaging_total_s_);
+    recorder_->set_status(status);
+    recorder_->flush();
+    if (watchpoints_) watchpoints_->flush();
+    if (code == 0) log("done: t = " + std::to_string(t_) + " s, " + std::to_string(windows_) + " windows; record in " +
+                       recorder_->file().string());
+    return code;
+}
+
+void Runner::initialise(std::optional<Checkpoint>& resume) {
+    const Value& run = scene_.section("run");
+    HubTiming timing{run.at("heartbeat_s").as_double(), run.at("timeout_s").as_double(), run.at("startup_timeout_s").as_double()};
+    if (opt_.listen.empty()) launcher_ = std::make_unique<Launcher>();
+    hub_ = std::make_unique<Hub>(opt_.listen.empty() ? "tcp://127.0.0.1:*" : opt_.listen, random_token(), timing,
+                                 launcher_.get(), [this](const std::string& s) { log(s); });
+    session_ = std::make_unique<Session>(*hub_);
+    log("listening on " + hub_->endpoint());
+    if (launcher_) {
+        for (const auto& role : roles_) launcher_->start(role, program_for(role), hub_->token());
+    } else {
+        log("waiting for " + std::to_string(roles_.size()) + " participant(s) at " + hub_->endpoint() +
+            "; start each with --connect " + hub_->endpoint() + " --name ROLE and SPHFSI_TOKEN=" + hub_->token());
+    }
+    hub_->await_hellos(roles_);
+
+    t0_ = resume ? resume->t : 0.0;
+    t_ = t0_;
+    for (const auto& role : roles_) {
+        InitRequest req;
+        req.config = scene_.section(role);
+        req.t0 = t0_;
+        if (role == "fluid" && coupled_) req.interface = iface_.mesh;
+        if (resume) req.state = resume->states.at(role);
+        Message m = hub_->request(role, MessageType::Init, req);
+        if (m.type != MessageType::Ready) throw ParticipantFailure(role, "garbage", "answered INIT with " + std::string(to_string(m.type)));
+        const auto& ready = m.as<InitReply>();
+        if (role == "structure") {
+            // A structure alone may have no wetted surface; coupled, the fluid needs one to push on.
+            if (!ready.interface && coupled_)
+                throw ParticipantFailure(role, "bad_config", "publishes no interface mesh (no wetted member) in a coupled scene");
+            InterfaceMesh mesh = ready.interface ? *ready.interface : InterfaceMesh{F64Array({0, 2}, {}), I32Array({0, 4}, {})};
+            iface_.reset(mesh);
+            recorder_->set_interface(mesh);
+            structure_dt_ = ready.dt_wanted;
+        } else {
+            fluid_dt_ = ready.dt_wanted;
+        }
+        recorder_->set_participant(role, hub_->peers().at(role).software, ready.info);
+    }
+    if (structure_)
+        watchpoints_ = std::make_unique<Watchpoints>(opt_.out_dir / "watchpoints.csv", scene_.tree, iface_.mesh,
+                                                     resume.has_value(), t0_);
+    if (coupled_) {
+        schedule_ = std::make_unique<Schedule>(scene_.section("coupling"));
+        scheme_ = make_scheme(scene_.section("coupling"), *session_, [this](const std::string& s) { log(s); });
+    }
+    if (resume) {
+        InterfaceState saved = resume->interface;
+        iface_ = saved;
+        output_index_ = resume->output_index;
+        checkpoint_index_ = resume->checkpoint_index;
+        windows_ = resume->windows;
+        steps_ = resume->steps;
+        fluid_dt_ = resume->fluid_dt;
+        structure_dt_ = resume->structure_dt;
+        log("resumed at t = " + std::to_string(t0_) + " s");
+    } else {
+        snapshot_all();  // frame 0: the initial state
+        if (watchpoints_) watchpoints_->write(t_, iface_.displacement);
+    }
+    recorder_->set_text("window_rule_legend", window_rule_legend());
+    progress_ = std::make_unique<ProgressDisplay>(t0_, end_, opt_.quiet);
+}
+
+WindowPlan Runner::plan_window(double t_stop) const {
+    if (coupled_) return schedule_->next(t_, fluid_dt_, structure_dt_, t_stop);
+    WindowPlan p;
+    p.t = t_;
+    if (fluid_) {  // alone, the fluid runs adaptively all the way to the next output
+        p.rule = WindowRule::FluidAlone;
+        p.dt = t_stop - t_;
+        p.fluid_substeps = 0;
+        return p;
+    }
+    p.rule = WindowRule::StructureAlone;
+    p.dt = structure_dt_;
+    p.structure_substeps = 1;
+    if (t_ + p.dt >= t_stop * (1 - 1e-14) || t_stop - (t_ + p.dt) < 1e-9 * p.dt) {
+        p.clipped = t_ + p.dt > t_stop;
+        p.dt = t_stop - t_;
+    }
+    return p;
+}
+
+WindowOutcome Runner::advance_alone(const WindowPlan& p) {
+    WindowOutcome o;
+    if (fluid_) {
+        o.fluid = session_->advance("fluid", p.t, p.dt, p.fluid_substeps, 0, {});
+        return o;
+    }
+    Fields inputs;
+    if (const Value* load = scene_.tree.find("load")) iface_.force = prescribed_force(*load, iface_.vertices(), p.t + 0.5 * p.dt);
+    inputs["force"] = iface_.force;
+    o.structure = session_->advance("structure", p.t, p.dt, p.structure_substeps, 0, std::move(inputs));
+    iface_.previous_displacement = iface_.displacement;
+    iface_.previous_dt = p.dt;
+    iface_.displacement = vertex_field("structure", o.structure.reply.outputs, "displacement", iface_.vertices());
+    iface_.velocity = vertex_field("structure", o.structure.reply.outputs, "velocity", iface_.vertices());
+    return o;
+}
+
+void Runner::loop() {
+    const double eps = 1e-12 * std::max(1.0, end_);
+    while (t_ < end_ - eps) {
+        // Windows land exactly on output and checkpoint times, and on the end.
+        double t_out = std::min(end_, t0_ == 0.0 ? (output_index_)*output_dt_ : std::max(t_, output_index_ * output_dt_));
+        if (t_out <= t_ + eps) t_out = std::min(end_, (output_index_ + 1) * output_dt_);
+        double t_ckpt = (checkpoint_index_ + 1) * checkpoint_dt_;
+        double t_stop = std::min({t_out, t_ckpt, end_});
+        if (t_stop <= t_ + eps) t_stop = std::min(end_, t_ + output_dt_);
+        WindowPlan plan = plan_window(t_stop);
+        auto start = Clock::now();
+        WindowOutcome o = coupled_ ? scheme_->run(plan, iface_) : advance_alone(plan);
+        double wall = std::chrono::duration<double>(Clock::now() - start).count();
+        t_ = (plan.t + plan.dt >= t_stop - eps) ? t_stop : plan.t + plan.dt;
+        if (fluid_) fluid_dt_ = o.fluid.reply.dt_wanted;
+        if (structure_) structure_dt_ = o.structure.reply.dt_wanted;
+        ++windows_;
+        steps_ += fluid_ ? o.fluid.reply.substeps : o.structure.reply.substeps;
+        record_window(plan, o, wall);
+        if (watchpoints_) watchpoints_->write(t_, iface_.displacement);
+        progress_->update(t_, steps_);
+        if (t_ >= output_index_ * output_dt_ - eps) snapshot_all();
+        if (t_ >= (checkpoint_index_ + 1) * checkpoint_dt_ - eps && t_ < end_ - eps) checkpoint();
+    }
+}
+
+void Runner::record_window(const WindowPlan& p, const WindowOutcome& o, double wall_s) {
+    // Messaging and waiting: the part of each round trip not spent computing in the participant.
+    double fluid_overhead = fluid_ ? std::max(0.0, o.fluid.roundtrip_s - o.fluid.reply.compute_s) : 0.0;
+    double structure_overhead = structure_ ? std::max(0.0, o.structure.roundtrip_s - o.structure.reply.compute_s) : 0.0;
+    messaging_total_s_ += fluid_overhead + structure_overhead;
+    wall_in_loop_s_ += wall_s;
+    std::vector<std::pair<std::string, double>> row{
+        {"t", t_},
+        {"dt", p.dt},
+        {"rule", static_cast<double>(p.rule)},
+        {"clipped", p.clipped ? 1.0 : 0.0},
+        {"fluid_substeps", static_cast<double>(o.fluid.reply.substeps)},
+        {"structure_substeps", static_cast<double>(o.structure.reply.substeps)},
+        {"iterations", static_cast<double>(o.iterations)},
+        {"residual", o.residual},
+        {"converged", o.converged ? 1.0 : 0.0},
+        {"fluid_dt_wanted", fluid_dt_},
+        {"structure_dt_wanted", structure_dt_},
+        {"fluid_solver_iterations", static_cast<double>(o.fluid.reply.solver_iterations)},
+        {"structure_solver_iterations", static_cast<double>(o.structure.reply.solver_iterations)},
+        {"fluid_compute_s", o.fluid.reply.compute_s},
+        {"structure_compute_s", o.structure.reply.compute_s},
+        {"fluid_roundtrip_s", o.fluid.roundtrip_s},
+        {"structure_roundtrip_s", o.structure.roundtrip_s},
+        {"messaging_s", fluid_overhead + structure_overhead},
+        {"wall_s", wall_s},
+    };
+    recorder_->append_window(row, structure_ ? &iface_.displacement : nullptr, structure_ ? &iface_.force : nullptr);
+}
+
+void Runner::snapshot_all() {
+    for (const auto& role : roles_) {
+        Message m = hub_->request(role, MessageType::Snapshot);
+        if (m.type != MessageType::Frame) throw ParticipantFailure(role, "garbage", "answered SNAPSHOT with " + std::string(to_string(m.type)));
+        recorder_->append_frame(role, t_, m.as<Frame>().fields);
+    }
+    if (watchpoints_) watchpoints_->flush();
+    ++output_index_;
+}
+
+void Runner::checkpoint() {
+    Checkpoint c;
+    c.scene_file = scene_.file.string();
+    c.scene_text = scene_.text;
+    c.overrides = scene_.overrides;
+    c.t = t_;
+    c.output_index = output_index_;
+    c.checkpoint_index = checkpoint_index_ + 1;
+    c.windows = windows_;
+    c.steps = steps_;
+    c.fluid_dt = fluid_dt_;
+    c.structure_dt = structure_dt_;
+    c.interface = iface_;
+    for (const auto& role : roles_) {
+        Message m = hub_->request(role, MessageType::Checkpoint);
+        if (m.type != MessageType::State) throw ParticipantFailure(role, "garbage", "answered CHECKPOINT with " + std::string(to_string(m.type)));
+        c.states[role] = m.as<State>().bytes;
+    }
+    recorder_->flush();
+    write_checkpoint(opt_.out_dir / "checkpoint.bin", c);
+    ++checkpoint_index_;
+}
+}  // namespace
+
+int run_scene(const RunOptions& options) {
+    try {
+        return Runner(options).execute();
+    } catch (const ConfigError& e) {
+        std::cerr << "sphfsi: invalid scene:\n" << e.what() << std::endl;
+        return 2;
+    } catch (const std::exception& e) {
+        std::cerr << "sphfsi: " << e.what() << std::endl;
+        return 1;
+    }
+}
+
+}  // namespace sphfsi::coordinator

@@ -1,0 +1,109 @@
+#include "sphfsi/coordinator/scene.hpp"
+
+#include <fstream>
+#include <sstream>
+#include <toml++/toml.h>
+
+namespace sphfsi::coordinator {
+namespace {
+
+Value from_toml(const toml::node& node, const std::string& path) {
+    Value v;
+    if (auto t = node.as_table()) {
+        Value::Table out;
+        for (const auto& [k, child] : *t) {
+            std::string key(k.str());
+            out.emplace(key, from_toml(child, path.empty() ? key : path + "." + key));
+        }
+        v = Value(std::move(out));
+    } else if (auto a = node.as_array()) {
+        Value::Array out;
+        for (const auto& child : *a) out.push_back(from_toml(child, path));
+        v = Value(std::move(out));
+    } else if (auto s = node.as_string()) {
+        v = Value(s->get());
+    } else if (auto i = node.as_integer()) {
+        v = Value(static_cast<std::int64_t>(i->get()));
+    } else if (auto f = node.as_floating_point()) {
+        v = Value(f->get());
+    } else if (auto b = node.as_boolean()) {
+        v = Value(b->get());
+    } else {
+        throw ConfigError("key '" + path + "': dates and times are not allowed in scenes");
+    }
+    v.line = static_cast<int>(node.source().begin.line);
+    return v;
+}
+
+std::string read_file(const std::filesystem::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw ConfigError(file.string() + ": cannot read the scene file");
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+}  // namespace
+
+void apply_override(Value& root, const std::string& assignment) {
+    auto eq = assignment.find('=');
+    if (eq == std::string::npos || eq == 0)
+        throw ConfigError("--set " + assignment + ": expected key.path=value");
+    std::string key = assignment.substr(0, eq);
+    std::string text = assignment.substr(eq + 1);
+    Value v;
+    try {
+        auto doc = toml::parse("x = " + text);
+        v = from_toml(*doc.get("x"), key);
+    } catch (const toml::parse_error&) {
+        v = Value(text);  // a bare word such as wcsph is meant as a string
+    }
+    v.line = 0;
+    set_path(root, key, std::move(v));
+}
+
+std::optional<std::vector<std::string>> Scene::custom_program(std::string_view role) const {
+    const Value* p = find_path(tree, "participants");
+    const Value* cmd = p ? p->find(role) : nullptr;
+    if (!cmd) return std::nullopt;
+    std::vector<std::string> words;
+    std::istringstream in(cmd->as_string());
+    for (std::string w; in >> w;) {
+        // Relative paths (anything with a slash) are relative to the scene file, so scenes are portable.
+        if (w.find('/') != std::string::npos && w.front() != '/') w = (file.parent_path() / w).lexically_normal().string();
+        words.push_back(w);
+    }
+    return words;
+}
+
+Scene load_scene(const std::filesystem::path& file, const std::vector<std::string>& overrides) {
+    Scene scene;
+    scene.file = file;
+    scene.text = read_file(file);
+    scene.overrides = overrides;
+    Value raw;
+    try {
+        raw = from_toml(toml::parse(scene.text, file.string()), "");
+    } catch (const toml::parse_error& e) {
+        throw ConfigError(file.string() + ":" + std::to_string(e.source().begin.line) + ": not valid TOML: " +
+                          std::string(e.description()));
+    } catch (const ConfigError& e) {
+        throw ConfigError(file.string() + ": " + e.what());
+    }
+    for (const auto& o : overrides) {
+        try {
+            apply_override(raw, o);
+        } catch (const ConfigError& e) {
+            throw ConfigError(file.string() + ": " + e.what());
+        }
+    }
+    std::vector<std::string> external;
+    if (const Value* p = raw.find("participants"); p && p->is_table())
+        for (const auto& [role, cmd] : p->as_table()) external.push_back(role);
+    schema::Errors errors;
+    scene.tree = scene_schema(external).validate(raw, "", errors);
+    schema::throw_if_any(errors, file.string());
+    return scene;
+}
+
+}  // namespace sphfsi::coordinator

@@ -1,0 +1,118 @@
+// The keys of a whole scene: the coordinator's own sections here, [fluid] and [structure] from the
+// solver libraries' schemas (so a scene is checked completely before any process starts).
+#include <algorithm>
+
+#include "sphfsi/coordinator/scene.hpp"
+#include "sphfsi/fluid/schema.hpp"
+#include "sphfsi/structure/schema.hpp"
+
+namespace sphfsi::coordinator {
+namespace {
+
+void run_section(schema::TableSchema& s) {
+    auto& run = s.table("run", "How long to run, how often to record, and how patient to be with participants.", true);
+    run.string("title", "Free text recorded with the run.").fallback("");
+    run.number("end_time", "Simulated time at which the run ends.").unit("s").greater_than(0).at_most(1e6).required();
+    run.number("output_interval", "Simulated time between recorded frames (default: end_time / 100).")
+        .unit("s").greater_than(0).at_most(1e6);
+    run.number("checkpoint_interval", "Simulated time between checkpoints for --resume (default: 10 output intervals).")
+        .unit("s").greater_than(0).at_most(1e6);
+    run.number("timeout_s", "A participant silent this long (no reply, no heartbeat) is declared dead.")
+        .unit("s").greater_than(0).at_most(3600).fallback(3.0);
+    run.number("heartbeat_s", "Heartbeat period asked of every participant (must be well below timeout_s).")
+        .unit("s").greater_than(0).at_most(60).fallback(0.5);
+    run.number("startup_timeout_s", "Time a participant has to connect and say HELLO.")
+        .unit("s").greater_than(0).at_most(3600).fallback(10.0);
+    run.check([](const Value& t, const std::string& path, schema::Errors& e) {
+        if (t.at("heartbeat_s").as_double() * 2 > t.at("timeout_s").as_double())
+            e.add(&t.at("heartbeat_s"), "key '" + path + ".heartbeat_s': must be at most half of " + path +
+                                            ".timeout_s, or a healthy participant would look dead");
+    });
+}
+
+void coupling_section(schema::TableSchema& s) {
+    auto& c = s.table("coupling", "How the fluid and the structure advance together (coupled scenes only).");
+    c.choice("scheme", {"serial-explicit", "parallel-explicit", "implicit-fixed", "implicit-aitken", "implicit-iqn-ils"},
+             "Coupling scheme; see docs/coupling.md.").fallback("serial-explicit");
+    c.choice("window", {"thesis", "multi-rate", "fixed"},
+             "thesis: one fluid step per window, structure sub-cycled n = int(dt_f/dt_s)+1 times; multi-rate: a "
+             "window spans several fluid steps; fixed: window_dt.").fallback("thesis");
+    c.number("window_dt", "Window length for window = \"fixed\".").unit("s").greater_than(0).at_most(10);
+    c.integer("max_fluid_steps", "multi-rate: most fluid steps one window may span.").at_least(1).at_most(100000).fallback(10);
+    c.choice("predictor", {"none", "linear", "quadratic"}, "Interface displacement predictor for explicit schemes.")
+        .fallback("linear");
+    c.number("tolerance_rel", "Implicit: converged when |residual| <= tolerance_rel |displacement| + tolerance_abs.")
+        .greater_than(0).at_most(1).fallback(1e-3);
+    c.number("tolerance_abs", "Implicit: absolute part of the convergence test.").unit("m").at_least(0).at_most(1).fallback(1e-9);
+    c.integer("max_iterations", "Implicit: iteration cap per window.").at_least(1).at_most(1000).fallback(30);
+    c.choice("on_max_iterations", {"warn", "error"}, "Implicit: what hitting the cap does.").fallback("warn");
+    c.number("relaxation", "Implicit: initial (fixed-point: constant) under-relaxation factor.").greater_than(0).at_most(1).fallback(0.5);
+    c.integer("iqn_reuse", "IQN-ILS: past windows whose secant pairs are reused.").at_least(0).at_most(100).fallback(8);
+}
+
+void load_section(schema::TableSchema& s) {
+    auto& l = s.table("load", "Prescribed interface force for a structure run alone, spread evenly over the interface vertices.");
+    l.vector("force", 2, "Total force (x, y) on the interface.").unit("N/m").fallback(Value::Array{0.0, 0.0});
+    l.choice("profile", {"constant", "ramp", "sine"}, "constant from t = 0; ramp: linear over ramp_time then constant; "
+             "sine: force * sin(2 pi frequency t).").fallback("constant");
+    l.number("ramp_time", "Duration of the ramp.").unit("s").greater_than(0).fallback(1.0);
+    l.number("frequency", "Frequency of the sine profile.").unit("Hz").greater_than(0).fallback(1.0);
+}
+
+void watchpoint_section(schema::TableSchema& s) {
+    auto& w = s.table_array("watchpoint", "A named point on the structure whose displacement goes to watchpoints.csv.");
+    w.string("name", "Column name, e.g. tip.").required();
+    w.number("x", "Reference position x.").unit("m").required();
+    w.number("y", "Reference position y.").unit("m").required();
+}
+
+void participants_section(schema::TableSchema& s) {
+    auto& p = s.table("participants", "Replace a built-in participant by another program (its section is then "
+                                      "checked by that program at INIT). Paths with a slash are relative to the scene file.");
+    p.string("fluid", "Command line of the fluid program.");
+    p.string("structure", "Command line of the structure program.");
+}
+
+void add_solver_section(schema::TableSchema& s, const std::string& role, const schema::TableSchema& builtin,
+                        const std::vector<std::string>& external) {
+    if (std::find(external.begin(), external.end(), role) != external.end()) {
+        s.free_table(role, "Section of the custom " + role + " program (checked by it).");
+        return;
+    }
+    schema::TableSchema& t = s.table(role, builtin.doc());
+    t = builtin;
+}
+
+}  // namespace
+
+schema::TableSchema scene_schema(const std::vector<std::string>& external) {
+    schema::TableSchema s("A scene: one TOML file. Present sections decide which participants start.");
+    run_section(s);
+    participants_section(s);
+    coupling_section(s);
+    load_section(s);
+    watchpoint_section(s);
+    add_solver_section(s, "fluid", fluid::scene_schema(), external);
+    add_solver_section(s, "structure", structure::scene_schema(), external);
+    s.check([](const Value& t, const std::string&, schema::Errors& e) {
+        bool fluid = t.contains("fluid"), structure = t.contains("structure");
+        if (!fluid && !structure) e.add(&t, "the scene has neither [fluid] nor [structure]; it needs at least one");
+        if (t.contains("load") && !structure) e.add(t.find("load"), "[load] drives a structure, but the scene has no [structure]");
+        if (t.contains("load") && fluid)
+            e.add(t.find("load"), "[load] is for a structure run alone; with a [fluid] the fluid provides the load");
+        if (t.contains("coupling") && !(fluid && structure))
+            e.add(t.find("coupling"), "[coupling] needs both [fluid] and [structure]");
+        if (t.contains("watchpoint") && !structure) e.add(t.find("watchpoint"), "watchpoints sit on the structure, but there is no [structure]");
+        if (const Value* p = t.find("participants"))
+            for (const auto& [role, cmd] : p->as_table())
+                if (!t.contains(role)) e.add(&cmd, "key 'participants." + role + "': the scene has no [" + role + "] section");
+        if (const Value* c = t.find("coupling"))
+            if (c->at("window").as_string() == "fixed" && !c->contains("window_dt"))
+                e.add(c, "missing key 'coupling.window_dt'; required when coupling.window = \"fixed\"");
+    });
+    return s;
+}
+
+std::string scene_reference() { return scene_schema().document(""); }
+
+}  // namespace sphfsi::coordinator

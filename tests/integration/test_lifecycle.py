@@ -1,0 +1,161 @@
+"""Lifecycle: participants that crash, hang, talk garbage or speak another version are named within
+the timeout and every process exits; strays are refused and logged; SIGINT and SIGKILL leave a
+readable record. All sockets are on 127.0.0.1 and every wait is bounded."""
+import os
+import random
+import signal
+import time
+
+import msgpack
+import zmq
+
+import harness
+
+BAD = os.path.join(harness.SCENES, "misbehaving.toml")
+LONG = os.path.join(harness.SCENES, "rigid_plate_long.toml")
+
+
+def run_fault(mode, expect, max_s, env=None, extra=()):
+    out = harness.out_dir(mode)
+    start = time.time()
+    code, text = harness.sphfsi("run", BAD, "--out", out, "--quiet", "--set", f"structure.mode={mode}", *extra,
+                                env=env, timeout=30)
+    took = time.time() - start
+    assert code == 1, (code, text)
+    assert expect in text, text
+    assert took < max_s, f"took {took:.1f} s"
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert f.attrs["status"].startswith("failed: structure"), f.attrs["status"]
+    return text
+
+
+def test_crash_is_named():
+    run_fault("crash", "error: structure exited with status 7", 5)
+
+
+def test_garbage_is_named():
+    run_fault("garbage", "error: structure sent a malformed message (bad_message)", 5)
+
+
+def test_error_reply_is_reported():
+    run_fault("error", "error: structure reported diverged: node 3: rotation = nan", 5)
+
+
+def test_silent_participant_is_named_within_timeout():
+    text = run_fault("silent", "error: structure has been silent for", 2.0 + 3.0)  # timeout_s = 2 plus shutdown
+
+
+def test_version_mismatch_is_refused_and_logged():
+    text = run_fault("version", "structure exited with status 3", 5, env={"MISBEHAVE": "version"})
+    assert "refused a connection: participant 'structure' speaks protocol 99..99" in text, text
+
+
+def start_long(name, *extra):
+    out = harness.out_dir(name)
+    run = harness.Running("run", LONG, "--out", out, "--quiet", *extra)
+    pid = harness.participant_pid(run.wait_for("structure connected"))
+    return run, out, pid
+
+
+def test_stopped_participant_is_named_and_reaped():
+    run, out, pid = start_long("sigstop")
+    time.sleep(0.5)
+    os.kill(pid, signal.SIGSTOP)  # a hang: no replies, no heartbeats
+    start = time.time()
+    code, text = run.finish(timeout=15)
+    assert code == 1, text
+    assert "structure has been silent for" in text, text
+    assert time.time() - start < 3.0 + 3.0  # default run.timeout_s = 3 s, plus shutdown
+    assert not harness.pid_alive(pid), "the stopped participant was left behind"
+
+
+def test_killed_participant_is_named():
+    run, out, pid = start_long("sigkill-participant")
+    time.sleep(0.5)
+    os.kill(pid, signal.SIGKILL)
+    code, text = run.finish(timeout=10)
+    assert code == 1 and "structure was killed by signal 9" in text, text
+
+
+def test_stray_connection_is_refused_and_logged():
+    out = harness.out_dir("stray")
+    run = harness.Running("run", LONG, "--out", out, "--quiet", "--set", "run.end_time=10")
+    endpoint = run.wait_for("listening on").split("listening on ")[1].strip()
+    assert endpoint.startswith("tcp://127.0.0.1:"), endpoint
+    ctx = zmq.Context()
+    stray = ctx.socket(zmq.DEALER)
+    stray.setsockopt(zmq.LINGER, 0)
+    stray.connect(endpoint)
+    hello = {"name": "structure", "kind": "structure", "version_min": 1, "version_max": 1, "software": "stray", "pid": 0}
+    stray.send(msgpack.packb({"v": 1, "type": "HELLO", "seq": 1, "token": "0" * 32, "body": hello}, use_bin_type=True))
+    assert stray.poll(5000), "no answer to a stray HELLO"
+    reply = msgpack.unpackb(stray.recv(), raw=False)
+    assert reply["type"] == "ERROR" and reply["body"]["code"] == "bad_token", reply
+    stray.send(b"\x00garbage")  # a stranger's garbage is refused too, and is not fatal
+    assert stray.poll(5000)
+    assert msgpack.unpackb(stray.recv(), raw=False)["body"]["code"] == "bad_message"
+    stray.close()
+    ctx.term()
+    code, text = run.finish(timeout=60)
+    assert code == 0, text  # the run itself is undisturbed
+    assert "refused a connection: HELLO carries a token that is not this run's" in text, text
+
+
+def test_sigint_stops_everything_and_keeps_the_record():
+    run, out, pid = start_long("sigint")
+    time.sleep(1.5)
+    run.proc.send_signal(signal.SIGINT)
+    code, text = run.finish(timeout=10)
+    assert code == 130, (code, text)
+    assert not harness.pid_alive(pid)
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert f.attrs["status"].startswith("interrupted at t = "), f.attrs["status"]
+        n = f["frames/structure/time"].shape[0]
+        assert n >= 2 and f["frames/structure/y"].shape[0] == n
+        assert f["windows/t"].shape[0] > 0
+
+
+def test_sigkill_at_random_moments_leaves_a_readable_record():
+    rng = random.Random(2026)
+    for attempt in range(5):
+        run, out, pid = start_long(f"kill{attempt}")
+        time.sleep(rng.uniform(0.3, 2.0))
+        run.proc.kill()
+        run.proc.wait(timeout=10)
+        deadline = time.time() + 5  # the participant follows its coordinator (parent-death signal)
+        while harness.pid_alive(pid) and time.time() < deadline:
+            time.sleep(0.05)
+        assert not harness.pid_alive(pid), "participant outlived a SIGKILLed coordinator"
+        with harness.record(os.path.join(out, "record.h5")) as f:
+            n = f["frames/structure/time"].shape[0]
+            assert n >= 1
+            y = f["frames/structure/y"][:]  # every completed frame reads back
+            assert y.shape[0] >= n
+            assert f.attrs["status"] == "running"
+
+
+def test_listen_mode_waits_for_a_remote_participant():
+    out = harness.out_dir("listen")
+    scene = os.path.join(harness.SCENES, "rigid_plate_step.toml")
+    run = harness.Running("run", scene, "--out", out, "--quiet", "--listen", "tcp://127.0.0.1:*")
+    line = run.wait_for("waiting for 1 participant(s)")
+    endpoint = line.split(" at ")[1].split(";")[0]
+    token = line.split("SPHFSI_TOKEN=")[1].strip()
+    import subprocess
+    part = subprocess.Popen(["/usr/bin/python3", os.path.join(harness.PARTICIPANTS, "rigid_plate.py"), "--connect", endpoint,
+                             "--name", "structure"], env={**os.environ, "SPHFSI_TOKEN": token})
+    code, text = run.finish(timeout=30)
+    assert code == 0, text
+    assert part.wait(timeout=10) == 0
+
+
+def test_missing_participant_is_named():
+    out = harness.out_dir("nobody")
+    scene = os.path.join(harness.SCENES, "rigid_plate_step.toml")
+    code, text = harness.sphfsi("run", scene, "--out", out, "--quiet", "--listen", "tcp://127.0.0.1:*", "--set",
+                                "run.startup_timeout_s=1", timeout=20)
+    assert code == 1 and "structure did not connect within 1.0 s" in text, text
+
+
+if __name__ == "__main__":
+    harness.main(globals())

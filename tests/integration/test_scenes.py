@@ -1,0 +1,55 @@
+"""Scene validation: every mistake is named with the file, the line, the key and the allowed values,
+and nothing runs on an invalid scene (no output directory is created)."""
+import os
+
+import harness
+
+INVALID = os.path.join(harness.SCENES, "invalid")
+
+
+def test_every_mistake_is_named():
+    path = os.path.join(INVALID, "many_mistakes.toml")
+    code, text = harness.sphfsi("check", path)
+    assert code == 2, text
+    for expected in [
+        f"{path}: line 3: key 'run.end_time': got -1; allowed: a number > 0 and <= 1e+06 (s)",
+        f"{path}: line 4: key 'run.timeout_s': got a string; allowed: a number > 0 and <= 3600 (s)",
+        f"{path}: line 5: unknown key 'run.colour'; allowed keys here: \"title\", \"end_time\"",
+        f"{path}: line 8: key 'load.force': got 1 entries; allowed: an array of 2 numbers (N/m)",
+    ]:
+        assert expected in text, f"missing: {expected}\n---\n{text}"
+
+
+def test_invalid_toml_names_the_line():
+    path = os.path.join(INVALID, "not_toml.toml")
+    code, text = harness.sphfsi("check", path)
+    assert code == 2 and f"{path}:3: not valid TOML" in text, text
+
+
+def test_a_scene_needs_a_participant():
+    code, text = harness.sphfsi("check", os.path.join(INVALID, "empty_scene.toml"))
+    assert code == 2 and "the scene has neither [fluid] nor [structure]" in text, text
+
+
+def test_bad_override_is_named():
+    scene = os.path.join(harness.SCENES, "rigid_plate_step.toml")
+    code, text = harness.sphfsi("check", scene, "--set", "run.end_tme=3")
+    assert code == 2 and "unknown key 'run.end_tme'" in text, text
+    code, text = harness.sphfsi("check", scene, "--set", "run.output_interval=0")
+    assert code == 2 and "key 'run.output_interval': got 0" in text, text
+
+
+def test_nothing_runs_on_an_invalid_scene():
+    out = os.path.join(harness.out_dir("invalid"), "never")
+    code, text = harness.sphfsi("run", os.path.join(INVALID, "many_mistakes.toml"), "--out", out)
+    assert code == 2, text
+    assert not os.path.exists(out), "an output directory was created for an invalid scene"
+
+
+def test_missing_file_is_named():
+    code, text = harness.sphfsi("check", "/nonexistent/scene.toml")
+    assert code == 2 and "/nonexistent/scene.toml: cannot read the scene file" in text, text
+
+
+if __name__ == "__main__":
+    harness.main(globals())

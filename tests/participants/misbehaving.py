@@ -1,0 +1,99 @@
+#!/usr/bin/env -S /usr/bin/python3
+"""A structure participant that misbehaves on purpose, for the coordinator's failure tests.
+
+It is a foreign program speaking docs/protocol.md (not a stand-in for one of ours): the coordinator
+must name it and shut the run down within its timeout whatever it does. The scene's [structure]
+section picks the fault:
+  mode = "garbage"        answers the first ADVANCE with bytes that are not MessagePack
+  mode = "crash"          exits with status 7 on the first ADVANCE
+  mode = "silent"         stops answering and stops heartbeats after INIT (a hang)
+  mode = "version"        says HELLO with protocol version 99 only
+  mode = "error"          answers the first ADVANCE with ERROR diverged
+"""
+import os
+import struct
+import sys
+import threading
+import time
+
+import msgpack
+import zmq
+
+
+def main():
+    args = dict(zip(sys.argv[1::2], sys.argv[2::2]))
+    token = os.environ.get("SPHFSI_TOKEN", args.get("--token", ""))
+    sock = zmq.Context().socket(zmq.DEALER)
+    sock.setsockopt(zmq.LINGER, 0)
+    sock.connect(args["--connect"])
+    lock = threading.Lock()
+    beating = threading.Event()
+
+    def send(kind, seq, body, v=1):
+        with lock:
+            sock.send(msgpack.packb({"v": v, "type": kind, "seq": seq, "token": token, "body": body}, use_bin_type=True))
+
+    def recv(timeout_s=10.0):
+        end = time.time() + timeout_s
+        while time.time() < end:
+            with lock:
+                if sock.poll(50):
+                    return msgpack.unpackb(sock.recv(), raw=False)
+        sys.exit("misbehaving: coordinator silent")
+
+    # The mode arrives only with INIT; a version fault must show at HELLO, so it may also come from the env.
+    mode = os.environ.get("MISBEHAVE", "")
+    version = 99 if mode == "version" else 1
+    send("HELLO", 1, {"name": args.get("--name", "structure"), "kind": "structure", "version_min": version,
+                      "version_max": version, "software": "misbehaving.py", "pid": os.getpid()}, v=version)
+    reply = recv()
+    if reply["type"] != "WELCOME":
+        print("misbehaving: refused:", reply["body"].get("message"), file=sys.stderr)
+        sys.exit(3)
+
+    def heartbeat():
+        n = 0
+        while beating.is_set():
+            n += 1
+            send("HEARTBEAT", 1000 + n, {"progress": n})
+            time.sleep(0.2)
+
+    beating.set()
+    threading.Thread(target=heartbeat, daemon=True).start()
+    def f8(rows, values):
+        return {"dtype": "f8", "shape": [rows, 2], "data": struct.pack("<%dd" % len(values), *values)}
+
+    mesh = {"vertices": f8(4, [0, 0, 1, 0, 1, 0.1, 0, 0.1]),
+            "cells": {"dtype": "i4", "shape": [1, 4], "data": struct.pack("<4i", 0, 1, 2, 3)}}
+    while True:
+        msg = recv(30.0)
+        kind, seq, body = msg["type"], msg["seq"], msg["body"]
+        if kind == "HEARTBEAT":
+            continue
+        if kind == "INIT":
+            mode = body["config"].get("mode", mode)
+            send("READY", seq, {"dt_wanted": 0.01, "interface": mesh, "info": {}})
+            if mode == "silent":
+                beating.clear()
+                time.sleep(3600)
+        elif kind == "ADVANCE":
+            if mode == "garbage":
+                with lock:
+                    sock.send(b"\xc1 this is not msgpack")
+            elif mode == "crash":
+                os._exit(7)
+            elif mode == "error":
+                send("ERROR", seq, {"code": "diverged", "message": "node 3: rotation = nan at t = 0.01 s", "in_reply_to": seq})
+            else:
+                zero = f8(4, [0.0] * 8)
+                send("ADVANCED", seq, {"t": body["t"] + body["dt"], "dt_wanted": 0.01, "outputs": {"displacement": zero, "velocity": zero},
+                                       "substeps": 1, "solver_iterations": 0, "compute_s": 0.0, "stats": {}})
+        elif kind == "SNAPSHOT":
+            send("FRAME", seq, {"t": 0.0, "fields": {}})
+        elif kind == "BYE":
+            send("ACK", seq, {})
+            return
+
+
+if __name__ == "__main__":
+    main()

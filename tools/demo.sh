@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# Installs what is missing, builds (Release) and runs the default scene; prints where the results are.
+set -euo pipefail
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+"$here/tools/setup.sh"
+build="${SPHFSI_BUILD_DIR:-$here/build}"
+scene="${1:-$here/scenarios/elastic_gate.toml}"
+name=$(basename "$scene" .toml)
+out="$here/out/$name"
+"$build/bin/sphfsi" run "$scene" --out "$out"
+if [ -f "$out/watchpoints.csv" ]; then
+  /usr/bin/python3 "$here/tools/plot_watchpoints.py" "$out/watchpoints.csv" "$out/watchpoints.png"
+fi
+echo "results in $out"
