@@ -280,12 +280,11 @@ WindowOutcome Runner::advance_alone(const WindowPlan& p) {
 void Runner::loop() {
     const double eps = 1e-12 * std::max(1.0, end_);
     while (t_ < end_ - eps) {
-        // Windows land exactly on output and checkpoint times, and on the end.
-        double t_out = std::min(end_, t0_ == 0.0 ? (output_index_)*output_dt_ : std::max(t_, output_index_ * output_dt_));
-        if (t_out <= t_ + eps) t_out = std::min(end_, (output_index_ + 1) * output_dt_);
+        // Windows land exactly on output and checkpoint times, and on the end. Frame k is due at
+        // k * output_interval (frame 0 is the initial state), checkpoint k at k * checkpoint_interval.
+        double t_out = output_index_ * output_dt_;
         double t_ckpt = (checkpoint_index_ + 1) * checkpoint_dt_;
         double t_stop = std::min({t_out, t_ckpt, end_});
-        if (t_stop <= t_ + eps) t_stop = std::min(end_, t_ + output_dt_);
         WindowPlan plan = plan_window(t_stop);
         auto start = Clock::now();
         WindowOutcome o = coupled_ ? scheme_->run(plan, iface_) : advance_alone(plan);
