@@ -84,28 +84,63 @@ std::vector<double> Value::as_doubles(std::string_view path) const {
     return out;
 }
 
+namespace {
+// One step of a dotted path: "members[2]" is key "members", index 2; "dp" is key "dp", no index.
+struct PathStep {
+    std::string key;
+    long index = -1;
+};
+
+PathStep parse_step(std::string_view part, std::string_view whole) {
+    PathStep step;
+    auto open = part.find('[');
+    step.key = std::string(part.substr(0, open));
+    if (step.key.empty()) throw ConfigError("empty key in '" + std::string(whole) + "'");
+    if (open == std::string_view::npos) return step;
+    if (part.back() != ']') throw ConfigError("expected key[index] in '" + std::string(whole) + "'");
+    std::string digits(part.substr(open + 1, part.size() - open - 2));
+    if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos)
+        throw ConfigError("index must be a non-negative integer in '" + std::string(whole) + "'");
+    step.index = std::stol(digits);
+    return step;
+}
+}  // namespace
+
 void set_path(Value& root, std::string_view dotted, Value v) {
+    const std::string_view whole = dotted;
     Value* node = &root;
     while (true) {
         if (node->is_null()) node->make_table();
         auto dot = dotted.find('.');
-        std::string key(dotted.substr(0, dot));
-        if (key.empty()) throw ConfigError("empty key in path");
+        PathStep step = parse_step(dotted.substr(0, dot), whole);
         auto& table = node->as_table_mut();
+        Value* child = &table[step.key];
+        if (step.index >= 0) {  // an entry of an array of tables, e.g. [[structure.members]]
+            if (!child->is_array() || static_cast<std::size_t>(step.index) >= child->as_array().size())
+                throw ConfigError("'" + std::string(whole) + "': there is no entry " + std::to_string(step.index) + " of '" +
+                                  step.key + "'");
+            child = &child->as_array_mut()[static_cast<std::size_t>(step.index)];
+        }
         if (dot == std::string_view::npos) {
-            table[key] = std::move(v);
+            *child = std::move(v);
             return;
         }
-        node = &table[key];
+        node = child;
         dotted.remove_prefix(dot + 1);
     }
 }
 
 const Value* find_path(const Value& root, std::string_view dotted) {
+    const std::string_view whole = dotted;
     const Value* node = &root;
     while (node) {
         auto dot = dotted.find('.');
-        node = node->find(dotted.substr(0, dot));
+        PathStep step = parse_step(dotted.substr(0, dot), whole);
+        node = node->find(step.key);
+        if (node && step.index >= 0)
+            node = node->is_array() && static_cast<std::size_t>(step.index) < node->as_array().size()
+                       ? &node->as_array()[static_cast<std::size_t>(step.index)]
+                       : nullptr;
         if (dot == std::string_view::npos) return node;
         dotted.remove_prefix(dot + 1);
     }

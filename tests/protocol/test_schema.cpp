@@ -85,3 +85,16 @@ TEST_CASE("the reference documents every key") {
     for (const char* key : {"`fluid.dp`", "`fluid.layers`", "`fluid.kernel`", "`fluid.gravity`", "`fluid.block[].width`"})
         CHECK(doc.find(key) != std::string::npos);
 }
+
+TEST_CASE("dotted paths reach into tables and arrays of tables") {
+    Value root;
+    set_path(root, "fluid.dp", Value(0.01));
+    set_path(root, "structure.members", Value(Value::Array{table({{"n", Value(3)}}), table({{"n", Value(4)}})}));
+    set_path(root, "structure.members[1].n", Value(9));
+    CHECK(find_path(root, "fluid.dp")->as_double() == 0.01);
+    CHECK(find_path(root, "structure.members[1].n")->as_int() == 9);
+    CHECK(find_path(root, "structure.members[0].n")->as_int() == 3);
+    CHECK(find_path(root, "structure.members[5].n") == nullptr);
+    CHECK_THROWS_AS(set_path(root, "structure.members[5].n", Value(1)), ConfigError);
+    CHECK_THROWS_AS(set_path(root, "structure.members[x].n", Value(1)), ConfigError);
+}
