@@ -52,7 +52,7 @@ const std::string& Hub::identity_of(const std::string& role) const {
 
 std::uint64_t Hub::send(const std::string& role, MessageType type, Body body) {
     Message m = make_message(type, ++seq_, token_, std::move(body));
-    m.version = version_;
+    m.version = peers_.at(role).version;
     send_raw(identity_of(role), m);
     return m.seq;
 }
@@ -150,9 +150,9 @@ void Hub::pump(int wait_ms) {
         }
         messaging_s_ += seconds_since(start);
         if (m.token != token_) throw ParticipantFailure(role, "garbage", "sent a message with a wrong token");
-        if (m.version != version_)
-            throw ParticipantFailure(role, "garbage", "switched protocol version to " + std::to_string(m.version));
         PeerInfo& peer = peers_[role];
+        if (m.version != peer.version)
+            throw ParticipantFailure(role, "garbage", "switched protocol version to " + std::to_string(m.version));
         peer.last_seen = Clock::now();
         if (m.type == MessageType::Heartbeat) {
             peer.progress = m.as<Heartbeat>().progress;
@@ -187,13 +187,13 @@ void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) 
     if (std::find(expected_.begin(), expected_.end(), h.name) == expected_.end())
         return refuse(m.seq, "refused", "the scene has no participant named '" + h.name + "'");
     if (peers_.count(h.name)) return refuse(m.seq, "refused", "'" + h.name + "' is already connected");
-    version_ = hi;
     identity_role_[id] = h.name;
     role_identity_[h.name] = id;
     PeerInfo& p = peers_[h.name];
     p.role = h.name;
     p.software = h.software;
     p.pid = h.pid;
+    p.version = hi;
     p.last_seen = Clock::now();
     Message w = make_message(MessageType::Welcome, m.seq, token_, Welcome{hi, timing_.heartbeat_s, timing_.timeout_s});
     w.version = hi;
@@ -215,7 +215,7 @@ void Hub::check_liveness() {
         last_beat_sent_ = Clock::now();
         for (const auto& [role, peer] : peers_) {
             Message m = make_message(MessageType::Heartbeat, ++seq_, token_, Heartbeat{0});
-            m.version = version_;
+            m.version = peer.version;
             send_raw(identity_of(role), m);
         }
     }

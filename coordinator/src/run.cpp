@@ -139,7 +139,6 @@ int Runner::execute() {
 
     RunMetadata meta{scene_.file.string(), scene_.text, "", kSoftwareVersion, kGitRevision, kProtocolVersion};
     for (const auto& o : scene_.overrides) meta.overrides += (meta.overrides.empty() ? "" : " ") + o;
-    if (resume) meta.overrides = "";
     recorder_ = std::make_unique<Recorder>(opt_.out_dir / "record.h5", meta,
                                            resume ? std::optional<double>(resume->t) : std::nullopt);
     std::string status = "completed";

@@ -44,6 +44,7 @@ struct HubTiming {
 struct PeerInfo {
     std::string role, software;
     std::int64_t pid = 0;
+    std::uint32_t version = 0;  // protocol version negotiated with this participant
     std::uint64_t progress = 0;
     std::chrono::steady_clock::time_point last_seen;
 };
@@ -85,7 +86,6 @@ private:
     HubTiming timing_;
     Launcher* launcher_;
     Log log_;
-    std::uint32_t version_ = protocol::kProtocolVersion;
     std::map<std::string, PeerInfo> peers_;              // by role
     std::map<std::string, std::string> identity_role_;   // routing identity -> role
     std::map<std::string, std::string> role_identity_;
