@@ -9,6 +9,11 @@ name=$(basename "$scene" .toml)
 out="$here/out/$name"
 "$build/bin/sphfsi" run "$scene" --out "$out"
 if [ -f "$out/watchpoints.csv" ]; then
-  /usr/bin/python3 "$here/tools/plot_watchpoints.py" "$out/watchpoints.csv" "$out/watchpoints.png"
+  refs=()
+  if [ "$name" = elastic_gate ]; then  # the experiment's tip displacements
+    refs=(--ref "tip dx=$here/scenarios/reference/antoci2007_gate_tip_dx.csv"
+          --ref "tip dy=$here/scenarios/reference/antoci2007_gate_tip_dy.csv")
+  fi
+  /usr/bin/python3 "$here/tools/plot_watchpoints.py" "$out/watchpoints.csv" "$out/watchpoints.png" "${refs[@]}"
 fi
 echo "results in $out"

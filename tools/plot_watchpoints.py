@@ -1,7 +1,10 @@
 #!/usr/bin/env -S /usr/bin/python3
 """Plots watchpoints.csv (time, name, x, y, dx, dy): the displacement of each named structure point.
 
-usage: /usr/bin/python3 tools/plot_watchpoints.py RUN/watchpoints.csv [OUT.png]
+usage: /usr/bin/python3 tools/plot_watchpoints.py RUN/watchpoints.csv [OUT.png] [--ref NAME.dx=FILE.csv ...]
+
+--ref overlays reference points (a CSV with '#' comment lines and two columns: t and the component,
+e.g. scenarios/reference/antoci2007_gate_tip_dx.csv) on the named watchpoint's component.
 """
 import csv
 import sys
@@ -13,11 +16,21 @@ matplotlib.use("Agg")  # files only; no display needed
 import matplotlib.pyplot as plt
 
 
+def read_reference(path):
+    with open(path) as f:
+        rows = list(csv.reader(line for line in f if not line.startswith("#")))
+    return [float(r[0]) for r in rows[1:]], [float(r[1]) for r in rows[1:]]
+
+
 def main():
-    if len(sys.argv) < 2:
+    args = [a for a in sys.argv[1:] if not a.startswith("--ref")]
+    refs = [a.split("=", 1)[1] for a in sys.argv[1:] if a.startswith("--ref=")]
+    refs += [sys.argv[i + 1] for i, a in enumerate(sys.argv[:-1]) if a == "--ref"]
+    args = [a for a in args if a not in refs]
+    if not args:
         sys.exit(__doc__)
-    src = sys.argv[1]
-    dst = sys.argv[2] if len(sys.argv) > 2 else src.rsplit(".", 1)[0] + ".png"
+    src = args[0]
+    dst = args[1] if len(args) > 1 else src.rsplit(".", 1)[0] + ".png"
     series = defaultdict(lambda: ([], [], []))
     with open(src) as f:
         for row in csv.DictReader(f):
@@ -28,9 +41,14 @@ def main():
     if not series:
         sys.exit(f"{src}: no watchpoints")
     fig, ax = plt.subplots(figsize=(7, 4))
+    colour = {}
     for name, (t, dx, dy) in series.items():
-        ax.plot(t, [1000 * v for v in dx], label=f"{name} dx")
-        ax.plot(t, [1000 * v for v in dy], "--", label=f"{name} dy")
+        colour[f"{name} dx"] = ax.plot(t, [1000 * v for v in dx], label=f"{name} dx")[0].get_color()
+        colour[f"{name} dy"] = ax.plot(t, [1000 * v for v in dy], "--", label=f"{name} dy")[0].get_color()
+    for ref in refs:
+        label, path = ref.split("=", 1)
+        t, d = read_reference(path)
+        ax.plot(t, [1000 * v for v in d], "o", mfc="none", color=colour.get(label), label=f"{label} (reference)")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("displacement [mm]")
     ax.grid(True, alpha=0.3)

@@ -1,0 +1,509 @@
+#!/usr/bin/env -S /usr/bin/python3
+"""Runs a scene over a grid of overrides and tabulates cost and error per run: `sphfsi sweep`.
+
+usage: /usr/bin/python3 tools/sweep.py SWEEP.toml [--jobs N] [--out DIR] [--only PATTERN] [--resume]
+                                       [--check] [--print-expect] [--list] [--bin BUILD/bin] [--no-charts]
+
+  SWEEP.toml      the sweep file (format: docs/sweeps.md); a file with a [bisect] table runs a
+                  stability bisection instead of a grid
+  --jobs N        runs at a time (default: [sweep] jobs, else the cores this process may use); each run
+                  gets OMP_NUM_THREADS = [sweep] threads_per_run, else max(1, cores // N)
+  --out DIR       output folder (default: out/sweeps/NAME under the current folder); each run in
+                  DIR/runs/SLUG-HASH, the table in DIR/results.csv, its description in DIR/sweep.json
+  --only PATTERN  run only the runs whose folder name or case name matches the shell pattern (a pattern
+                  without * ? [ matches as a substring); repeatable
+  --resume        keep the results of runs already in DIR (same overrides, same scene text); metrics are
+                  recomputed from their records
+  --check         regression guard: exit 1 if a run's status or a recorded value is off (docs/sweeps.md)
+  --print-expect  print the measured values as [[expect]] tables, to record them in the sweep file
+  --list          print the runs and their --set arguments; run nothing
+  --bin DIR       folder holding sphfsi (default: $SPHFSI_BIN, else $SPHFSI_BUILD_DIR/bin, else build/bin)
+  --no-charts     skip the charts named in [chart]
+
+Exit status: 0 done (failed runs are results, not errors), 1 --check found a regression, 2 a mistake in
+the sweep file or the command line, 130 interrupted (the runs in progress are stopped with SIGINT).
+"""
+import argparse
+import concurrent.futures
+import datetime
+import fnmatch
+import json
+import math
+import os
+import shutil
+import sys
+import threading
+
+TOOLS = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(TOOLS)
+sys.path.insert(0, TOOLS)
+
+import metrics  # noqa: E402
+from sweeplib import bisect as bisection  # noqa: E402
+from sweeplib import expect as guard  # noqa: E402
+from sweeplib import record, results, runner  # noqa: E402
+from sweeplib import spec as specs  # noqa: E402
+
+
+class Interrupted(Exception):
+    pass
+
+
+def cores():
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:
+        return os.cpu_count() or 1
+
+
+def find_sphfsi(bin_dir):
+    candidates = []
+    if bin_dir:
+        candidates.append(bin_dir)
+    if os.environ.get("SPHFSI_BIN"):
+        candidates.append(os.environ["SPHFSI_BIN"])
+    if os.environ.get("SPHFSI_BUILD_DIR"):
+        candidates.append(os.path.join(os.environ["SPHFSI_BUILD_DIR"], "bin"))
+    candidates.append(os.path.join(ROOT, "build", "bin"))
+    for c in candidates:
+        path = c if os.path.basename(c) == "sphfsi" and os.path.isfile(c) else os.path.join(c, "sphfsi")
+        if os.path.isfile(path) and os.access(path, os.X_OK):
+            return os.path.abspath(path)
+        if bin_dir and c == bin_dir:
+            break  # an explicit --bin that has no sphfsi is a mistake, not a hint
+    raise SystemExit(f"sweep: no sphfsi executable in {candidates[0]} (build it, or pass --bin BUILD/bin)")
+
+
+class Sweeper:
+    """Runs the runs of one sweep, keeps their rows, computes their metrics."""
+
+    def __init__(self, sw, out, sphfsi, jobs, threads, resume):
+        self.sw, self.out, self.sphfsi, self.jobs, self.resume = sw, out, sphfsi, jobs, resume
+        self.threads = threads
+        self.env = dict(os.environ)
+        if threads is not None:
+            self.env["OMP_NUM_THREADS"] = str(threads)
+        self.stop = threading.Event()
+        self.lock = threading.Lock()
+        self.metric_lock = threading.Lock()  # h5py: one reader at a time
+        try:
+            st = os.stat(sphfsi)
+            self.build_stamp = f"{sphfsi} {int(st.st_mtime)} {st.st_size}"
+        except OSError:
+            self.build_stamp = sphfsi
+        self.reused_other_build = False
+        self.metric_columns = []
+        self.metric_errors = []
+        for m in sw.metrics:
+            f = metrics.METRICS[m["name"]]
+            self.metric_columns += [f"{m['label']}.{k}" for k in f.columns]
+            self.metric_errors += [f"{m['label']}.{k}" for k in f.errors]
+
+    def run_dir(self, run):
+        return os.path.join(self.out, "runs", run.id)
+
+    def previous(self, run):
+        """The row of an earlier identical run in the output folder, or None."""
+        try:
+            with open(os.path.join(self.run_dir(run), "result.json")) as f:
+                data = json.load(f)
+        except (OSError, ValueError):
+            return None
+        if data.get("id") != run.id or data.get("scene_sha") != self.sw.scene_sha \
+                or data.get("set_args") != run.set_args() or data.get("row", {}).get("status") == "interrupted":
+            return None
+        if data.get("build") != self.build_stamp:
+            self.reused_other_build = True
+        return data["row"]
+
+    def execute(self, run):
+        """Runs one coordinator (or reuses its earlier result under --resume); returns its row."""
+        if self.resume:
+            row = self.previous(run)
+            if row is not None:
+                row = dict(row)
+                row["reused"] = True
+                return row
+        if self.stop.is_set():
+            raise Interrupted()
+        d = self.run_dir(run)
+        if os.path.isdir(d):
+            shutil.rmtree(d)
+        timeout = run.timeout_s if run.timeout_s is not None else self.sw.timeout_s
+        rr = runner.run_coordinator(self.sphfsi, self.sw.scene, d, run.set_args(), timeout, self.sw.grace_s,
+                                    self.env, self.stop)
+        with self.metric_lock:
+            row = record.summarize(d, rr, timeout)
+        results.write_json(os.path.join(d, "result.json"), {
+            "id": run.id, "scene": self.sw.scene, "scene_sha": self.sw.scene_sha, "set_args": run.set_args(),
+            "build": self.build_stamp, "threads": self.threads,
+            "finished": datetime.datetime.now().isoformat(timespec="seconds"), "row": row})
+        return row
+
+    def infos(self, rows_by_id, runs=None):
+        """metrics.RunInfo for every run of the sweep (unselected ones from their result.json, if any)."""
+        out = []
+        for r in (runs if runs is not None else self.sw.runs):
+            row = rows_by_id.get(r.id)
+            if row is None:
+                prev = self.previous(r)
+                status = prev["status"] if prev else "not run"
+            else:
+                status = row.get("status", "")
+            out.append(metrics.RunInfo(r.id, self.run_dir(r), status, r.settings, r.overrides, r.case,
+                                       r.reference))
+        return out
+
+    def compute_metrics(self, run, row, infos, which):
+        """Fills the row's metric columns; which: 'plain', 'reference' (uses_reference) or 'all'."""
+        if row.get("status") != "completed":
+            return
+        me = next(i for i in infos if i.id == run.id)
+        ctx = metrics.Context(me, infos, self.sw.dir)
+        notes = [n for n in (row.get("notes") or "").split("; ") if n]
+        for m in self.sw.metrics:
+            f = metrics.METRICS[m["name"]]
+            if which != "all" and f.uses_reference != (which == "reference"):
+                continue
+            if m["where"] and not specs.matches(run, m["where"]):
+                continue
+            notes = [n for n in notes if not n.startswith(m["label"] + ": ")]
+            try:
+                with self.metric_lock:
+                    vals = metrics.compute(m["name"], self.run_dir(run), m["params"], ctx)
+            except metrics.MetricError as err:
+                notes.append(f"{m['label']}: {err}")
+                continue
+            except Exception as err:  # a broken record must not end the sweep: say what happened
+                notes.append(f"{m['label']}: {type(err).__name__}: {err}")
+                continue
+            for k, v in vals.items():
+                row[f"{m['label']}.{k}"] = v
+        row["notes"] = "; ".join(notes)
+
+    def columns(self):
+        return results.columns(self.sw.setting_columns, self.metric_columns)
+
+    def full_row(self, run, row):
+        out = {"run": run.id, "case": run.case}
+        out.update(run.settings)
+        out.update(row)
+        return out
+
+
+def progress(i, n, run, row, extra=""):
+    status = row.get("status", "?")
+    cost = ""
+    if row.get("wall_s") is not None:
+        cost = f"{row['wall_s']:7.2f} s wall {row.get('cpu_s') or 0:7.2f} s CPU"
+    msg = f"  {row.get('message')}" if row.get("message") else ""
+    reused = " (kept)" if row.get("reused") else ""
+    print(f"[{i}/{n}] {status:<11} {run.label()}  {cost}{reused}{extra}{msg}", flush=True)
+
+
+def run_grid(sweeper, selected, args):
+    sw = sweeper.sw
+    rows_by_id = {}
+    csv_path = os.path.join(sweeper.out, "results.csv")
+    n = len(selected)
+    done = 0
+
+    def snapshot():
+        rows = [sweeper.full_row(r, rows_by_id[r.id]) for r in selected if r.id in rows_by_id]
+        results.write_csv(csv_path, sweeper.columns(), rows)
+
+    interrupted = False
+    with concurrent.futures.ThreadPoolExecutor(max_workers=sweeper.jobs) as pool:
+        futures = {pool.submit(sweeper.execute, r): r for r in selected}
+        try:
+            for fut in concurrent.futures.as_completed(futures):
+                run = futures[fut]
+                try:
+                    row = fut.result()
+                except Interrupted:
+                    continue
+                done += 1
+                rows_by_id[run.id] = row
+                sweeper.compute_metrics(run, row, sweeper.infos(rows_by_id), "plain")
+                shown = [c for c in sweeper.metric_errors if row.get(c) is not None][:2]
+                extra = "".join(f"  {c}={row[c]:.3g}" for c in shown)
+                progress(done, n, run, row, extra)
+                snapshot()
+        except KeyboardInterrupt:
+            interrupted = True
+            print("sweep: interrupted; stopping the runs in progress (SIGINT)", file=sys.stderr, flush=True)
+            sweeper.stop.set()
+            for fut, run in futures.items():
+                try:
+                    row = fut.result()
+                except (Interrupted, KeyboardInterrupt):
+                    continue
+                rows_by_id[run.id] = row
+    infos = sweeper.infos(rows_by_id)
+    for r in selected:
+        if r.id in rows_by_id:
+            sweeper.compute_metrics(r, rows_by_id[r.id], infos, "reference")
+    snapshot()
+    if interrupted:
+        return rows_by_id, True
+    return rows_by_id, False
+
+
+def describe_columns(sweeper):
+    cols = {c: {"meaning": m, "unit": u} for c, (m, u) in results.RUN_COLUMNS.items()}
+    for m in sweeper.sw.metrics:
+        f = metrics.METRICS[m["name"]]
+        for k, (meaning, unit) in f.columns.items():
+            cols[f"{m['label']}.{k}"] = {"meaning": f"{m['name']}: {meaning}", "unit": unit,
+                                         "error": k in f.errors}
+    return cols
+
+
+def write_description(sweeper, args, started, extra=None):
+    sw = sweeper.sw
+    data = {
+        "name": sw.name, "title": sw.title, "description": sw.description,
+        "sweep_file": sw.path, "scene": sw.scene, "scene_sha": sw.scene_sha,
+        "fixed": {k: specs.toml_value(v) for k, v in sw.fixed.items()},
+        "axes": [{"name": a.name, "values": [lbl for lbl, _ in a.values] if a.bundles
+                  else [specs.toml_value(v) for v in a.values]} for a in sw.axes],
+        "setting_columns": sw.setting_columns,
+        "metrics": sw.metrics,
+        "columns": describe_columns(sweeper),
+        "chart": sw.chart,
+        "sphfsi": sweeper.sphfsi, "jobs": sweeper.jobs, "threads_per_run": sweeper.threads, "cores": cores(),
+        "started": started, "finished": datetime.datetime.now().isoformat(timespec="seconds"),
+        "command": sys.argv,
+    }
+    data.update(extra or {})
+    results.write_json(os.path.join(sweeper.out, "sweep.json"), data)
+
+
+def draw_charts(sweeper, csv_path):
+    sw = sweeper.sw
+    import chart
+    ys = sw.chart["y"] or sweeper.metric_errors[:1]
+    made = []
+    for y in ys:
+        for x in sw.chart["x"]:
+            prefix = os.path.join(sweeper.out, f"chart-{y}-vs-{x}")
+            try:
+                summary = chart.chart_file(csv_path, x, y, sw.chart["series"], prefix,
+                                           title=sw.chart["title"], annotate=sw.chart["annotate"])
+            except chart.ChartError as err:
+                print(f"sweep: chart {y} vs {x}: {err}", file=sys.stderr)
+                continue
+            made.append(prefix)
+            print(f"chart: {prefix}.png/.svg ({summary})")
+    return made
+
+
+def run_bisection(sweeper, selected):
+    """One bisection per selected run (grid point or case), the bisections in parallel."""
+    sw = sweeper.sw
+    cfg = sw.bisect
+    key = cfg["key"]
+    probes = {r.id: [] for r in selected}
+    summaries = {}
+    fail_if = cfg["fail_if"]
+    print(f"bisection on {key} in [{cfg['low']}, {cfg['high']}] ({cfg['scale']}"
+          f"{', integer' if cfg['integer'] else ''}), rel_tol {cfg['rel_tol']}, at most {cfg['max_runs']} runs "
+          f"each (at most {bisection.bound_on_runs(cfg['low'], cfg['high'], cfg['scale'], cfg['integer'], cfg['rel_tol'])}"
+          " needed)", flush=True)
+
+    def target_job(target):
+        def probe(value):
+            overrides = dict(target.overrides)
+            overrides[key] = value
+            settings = dict(target.settings)
+            settings[key] = value
+            slug = ([("case", target.case)] if target.case else list(target.slug_items)) + [(key, value)]
+            prun = specs.Run(overrides, settings, slug_items=slug)
+            prun.case = target.case
+            row = sweeper.execute(prun)
+            infos = sweeper.infos({prun.id: row}, [prun])
+            sweeper.compute_metrics(prun, row, infos, "all")
+            passed = row.get("status") == "completed"
+            why = row.get("message") or ""
+            for col, limit in fail_if.items():
+                v = row.get(col)
+                if v is None or (isinstance(v, float) and math.isnan(v)):
+                    passed, why = False, f"fail_if: {col} has no value"
+                elif v > limit:
+                    passed, why = False, f"fail_if: {col} = {v:.4g} > {limit:g}"
+            full = sweeper.full_row(prun, row)
+            full.update({"target": target.label(), "probe": len(probes[target.id]) + 1, "value": value,
+                         "passed": passed, "reason": why})
+            with sweeper.lock:
+                probes[target.id].append(full)
+                print(f"[{target.label() or 'scene'}] {key} = {value!r}: "
+                      f"{'passes' if passed else 'fails'} ({row.get('status')}"
+                      f"{', ' + why if why else ''}){' (kept)' if row.get('reused') else ''}", flush=True)
+            if row.get("status") == "interrupted" and sweeper.stop.is_set():
+                raise Interrupted()
+            return passed, full
+
+        summaries[target.id] = bisection.bisect(cfg, probe)
+        return target
+
+    interrupted = False
+    with concurrent.futures.ThreadPoolExecutor(max_workers=sweeper.jobs) as pool:
+        futures = [pool.submit(target_job, t) for t in selected]
+        try:
+            for fut in concurrent.futures.as_completed(futures):
+                try:
+                    fut.result()
+                except Interrupted:
+                    pass
+        except KeyboardInterrupt:
+            interrupted = True
+            print("sweep: interrupted; stopping the runs in progress (SIGINT)", file=sys.stderr, flush=True)
+            sweeper.stop.set()
+            concurrent.futures.wait(futures)
+
+    probe_cols = ["target", "probe", "value", "passed", "reason"] + sweeper.columns()
+    probe_cols = list(dict.fromkeys(probe_cols))
+    results.write_csv(os.path.join(sweeper.out, "probes.csv"), probe_cols,
+                      [p for t in selected for p in probes[t.id]])
+    rows = []
+    for t in selected:
+        s = summaries.get(t.id)
+        if s is None:
+            continue
+        row = {"target": t.label(), "case": t.case}
+        row.update(t.settings)
+        row.update({"key": key, "passes": s["passes"], "threshold": s["threshold"],
+                    "first_failing": s["first_failing"], "rel_width": s["rel_width"], "runs": s["runs"],
+                    "converged": s["converged"], "note": s["note"]})
+        rows.append(row)
+        if s["threshold"] is not None:
+            side = "largest passing" if s["passes"] == "below" else "smallest passing"
+            print(f"[{t.label() or 'scene'}] {key}: {side} {s['threshold']!r}, first failing {s['first_failing']!r} "
+                  f"(width {100 * s['rel_width']:.2g} %, {s['runs']} runs){'' if s['converged'] else ' ' + s['note']}")
+        else:
+            print(f"[{t.label() or 'scene'}] {key}: {s['note']}")
+    cols = ["target", "case"] + sw.setting_columns + ["key", "passes", "threshold", "first_failing", "rel_width",
+                                                      "runs", "converged", "note"]
+    path = os.path.join(sweeper.out, "thresholds.csv")
+    results.write_csv(path, cols, rows)
+    print(f"probes: {os.path.join(sweeper.out, 'probes.csv')}\nthresholds: {path}")
+    if rows and not interrupted:
+        import chart
+        try:
+            prefix = os.path.join(sweeper.out, "thresholds")
+            by_target = {}
+            for t in selected:
+                by_target[t.label()] = probes[t.id]
+            chart.threshold_chart(rows, key, prefix, title=f"{sw.title}: stability limit of {key}",
+                                  log=cfg["scale"] == "log", probes=by_target, bracket=(cfg["low"], cfg["high"]))
+            print(f"chart: {prefix}.png/.svg")
+        except chart.ChartError as err:
+            print(f"sweep: threshold chart: {err}", file=sys.stderr)
+    return interrupted
+
+
+def select(runs, patterns):
+    if not patterns:
+        return list(runs)
+    out = []
+    for r in runs:
+        for p in patterns:
+            pat = p if any(c in p for c in "*?[") else f"*{p}*"
+            if fnmatch.fnmatchcase(r.id, pat) or (r.case and fnmatch.fnmatchcase(r.case, pat)):
+                out.append(r)
+                break
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="sweep.py", description=__doc__.split("\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("sweep_file")
+    ap.add_argument("--jobs", type=int)
+    ap.add_argument("--out")
+    ap.add_argument("--only", action="append", default=[])
+    ap.add_argument("--resume", action="store_true")
+    ap.add_argument("--check", action="store_true")
+    ap.add_argument("--print-expect", action="store_true")
+    ap.add_argument("--list", action="store_true")
+    ap.add_argument("--bin")
+    ap.add_argument("--no-charts", action="store_true")
+    args = ap.parse_args(argv)
+    try:
+        sw = specs.load(args.sweep_file)
+        for m in sw.metrics:
+            metrics.check_params(m["name"], m["params"])
+    except (specs.SweepError, metrics.MetricError) as err:
+        print(f"sweep: {err}", file=sys.stderr)
+        return 2
+    if args.jobs is not None and args.jobs < 1:
+        print("sweep: --jobs must be >= 1", file=sys.stderr)
+        return 2
+    selected = select(sw.runs, args.only)
+    if not selected:
+        print(f"sweep: --only {' '.join(args.only)} selects none of the {len(sw.runs)} runs", file=sys.stderr)
+        return 2
+    if args.list:
+        for r in selected:
+            flags = (" [reference]" if r.reference else "") + (f" expect {r.expect}" if r.expect else "")
+            print(f"{r.id}{flags}\n    " + " ".join(f"--set '{a}'" for a in r.set_args()))
+        return 0
+    if sw.bisect is not None and (args.check or args.print_expect):
+        print("sweep: --check and --print-expect apply to grid sweeps, not to a [bisect] file", file=sys.stderr)
+        return 2
+    sphfsi = find_sphfsi(args.bin)
+    out = os.path.abspath(args.out or os.path.join("out", "sweeps", sw.name))
+    os.makedirs(os.path.join(out, "runs"), exist_ok=True)
+    jobs = args.jobs or sw.jobs or cores()
+    if sw.bisect is None:
+        jobs = max(1, min(jobs, len(selected)))
+    threads = sw.threads_per_run
+    if threads is None and "OMP_NUM_THREADS" not in os.environ:
+        threads = max(1, cores() // jobs)
+    sweeper = Sweeper(sw, out, sphfsi, jobs, threads, args.resume)
+    started = datetime.datetime.now().isoformat(timespec="seconds")
+    print(f"sweep {sw.name}: {len(selected)} of {len(sw.runs)} runs of {os.path.relpath(sw.scene)}, {jobs} at a time, "
+          f"OMP_NUM_THREADS={sweeper.env.get('OMP_NUM_THREADS', '(unset)')}, into {out}", flush=True)
+
+    if sw.bisect is not None:
+        interrupted = run_bisection(sweeper, selected)
+        write_description(sweeper, args, started, {"bisect": sw.bisect})
+        return 130 if interrupted else 0
+
+    rows_by_id, interrupted = run_grid(sweeper, selected, args)
+    csv_path = os.path.join(out, "results.csv")
+    write_description(sweeper, args, started)
+    if sweeper.reused_other_build:
+        print("sweep: note: some kept results were made by another build of sphfsi than this one", file=sys.stderr)
+    counts = {}
+    for r in selected:
+        if r.id in rows_by_id:
+            s = rows_by_id[r.id].get("status")
+            counts[s] = counts.get(s, 0) + 1
+    print(f"results: {csv_path} (" + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())) + ")")
+    if interrupted:
+        return 130
+    if not args.no_charts and sw.metrics:
+        draw_charts(sweeper, csv_path)
+    if args.print_expect:
+        print(guard.expect_toml(selected, rows_by_id, sweeper.metric_errors,
+                                datetime.datetime.now().isoformat(timespec="minutes")))
+    if args.check:
+        failures, notes = guard.check(selected, rows_by_id, sw.check)
+        for n in notes:
+            print(f"check: note: {n}")
+        checked = sum(1 for r in selected if r.expect and r.id in rows_by_id)
+        if failures:
+            for f in failures:
+                print(f"check: FAIL {f}")
+            print(f"check: {len(failures)} regression(s) in {checked} guarded run(s)")
+            return 1
+        print(f"check: {checked} guarded run(s) as recorded")
+    return 0
+
+
+if __name__ == "__main__":
+    try:
+        sys.exit(main())
+    except KeyboardInterrupt:
+        sys.exit(130)
