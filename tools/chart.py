@@ -7,7 +7,8 @@ usage: /usr/bin/python3 tools/chart.py RESULTS.csv --x COST --y ERROR [--series 
   --x        cost column: wall_s, cpu_s, particle_steps, element_steps, coupling_iterations, ...
   --y        error column, e.g. tip.l2_rel (LABEL.QUANTITY of a [[metric]])
   --series   columns whose values together name a method (one line per method); default: the sweep's
-             [chart] series (from sweep.json next to the CSV), else every varied setting but the first
+             [chart] series (from sweep.json next to the CSV), else its grid axes whose values are not
+             numbers
   --annotate a column printed next to each point (e.g. the resolution)
   --where    keep only rows with KEY = VALUE (repeatable)
 Writes PREFIX.png and PREFIX.svg; prints the Pareto front.
@@ -198,11 +199,24 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
 
 
 def default_series(rows, desc):
+    """The sweep's [chart] series; else the grid axes whose values are not numbers (method names, bundle
+    labels: numeric axes are the refinement along each line); else one series."""
     chart = desc.get("chart") or {}
     if chart.get("series"):
         return list(chart["series"])
-    varied = list(desc.get("setting_columns") or [])
-    return varied[1:] if len(varied) > 1 else []
+    out = []
+    for axis in desc.get("axes") or []:
+        if not all(_is_number(v) for v in axis.get("values", [])):
+            out.append(axis["name"])
+    return [k for k in out if not rows or k in rows[0]]
+
+
+def _is_number(text):
+    try:
+        float(text)
+        return True
+    except (TypeError, ValueError):
+        return False
 
 
 def filter_rows(rows, where):
@@ -271,8 +285,8 @@ def threshold_chart(rows, key, prefix, title=None, log=True, probes=None, bracke
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog="chart.py", description=__doc__.split("\n")[0],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
+    ap = argparse.ArgumentParser(prog="chart.py", usage=argparse.SUPPRESS, description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("csv")
     ap.add_argument("--x", required=True)
     ap.add_argument("--y", required=True)

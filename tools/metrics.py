@@ -95,7 +95,8 @@ def compute(name, run_dir, params, context):
     full = {k: v for k, v in f.params.items() if v is not REQUIRED}
     full.update(params)
     out = f(run_dir, full, context)
-    return {k: float(v) for k, v in out.items()}
+    return {k: (int(v) if isinstance(v, (int, np.integer)) and not isinstance(v, bool) else float(v))
+            for k, v in out.items()}
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -260,6 +261,45 @@ def watchpoint_vs_reference_run(run_dir, params, context):
     return {"l2_rel": l2 / scale, "max_rel": float(np.max(np.abs(e))) / scale, "n_times": len(tc)}
 
 
+@metric("watchpoint_vs_data",
+        dict(watchpoint=REQUIRED, data_csv=REQUIRED, component="dy", t_start=None, t_end=None),
+        {"l2_rel": ("RMS over the data points of (u - u_data) / max |u_data|", "-"),
+         "max_rel": ("max |u - u_data| / max |u_data|", "-"),
+         "rms_abs": ("RMS over the data points of u - u_data", "m"),
+         "max_abs": ("max |u - u_data|", "m"),
+         "n_points": ("data points compared", "-")},
+        ("l2_rel", "max_rel"))
+def watchpoint_vs_data(run_dir, params, context):
+    """A watchpoint time series against measured or published data, e.g. the elastic gate's tip
+    displacement against Antoci, Gallati & Sibilla (2007) (scenarios/reference/antoci2007_gate_tip_dx.csv).
+
+    data_csv: two columns, time [s] and the value, after '#' comment lines and a header (relative paths
+    start at the sweep file). The run's series is interpolated linearly at each data time t_k in
+    [t_start, t_end] (default: all data); the run must cover those times (no extrapolation). With
+    e_k = u(t_k) - u_data,k and S = max_k |u_data,k|:
+        rms_abs = sqrt(mean_k e_k^2),  max_abs = max_k |e_k|,  l2_rel = rms_abs / S,  max_rel = max_abs / S
+    The mean is over data points, not time-weighted: digitised curves are sampled where the digitiser
+    clicked, and each point counts once. Time is never shifted.
+    """
+    path = context.resolve(params["data_csv"]) if context else params["data_csv"]
+    td, ud = read_reference_curve(path)
+    lo = td[0] if params.get("t_start") is None else float(params["t_start"])
+    hi = td[-1] if params.get("t_end") is None else float(params["t_end"])
+    keep = (td >= lo) & (td <= hi)
+    td, ud = td[keep], ud[keep]
+    if td.size == 0:
+        raise MetricError(f"no data point in [{lo:g}, {hi:g}] s")
+    t, v = watchpoint_series(run_dir, params["watchpoint"], params["component"])
+    tol = 1e-9 * max(1.0, abs(td[-1]))
+    if td[0] < t[0] - tol or td[-1] > t[-1] + tol:
+        raise MetricError(f"the run covers [{t[0]:g}, {t[-1]:g}] s, the data [{td[0]:g}, {td[-1]:g}] s")
+    e = np.interp(td, t, v) - ud
+    scale = float(np.max(np.abs(ud)))
+    rms, mx = math.sqrt(float(np.mean(e * e))), float(np.max(np.abs(e)))
+    return {"l2_rel": rms / scale if scale else math.nan, "max_rel": mx / scale if scale else math.nan,
+            "rms_abs": rms, "max_abs": mx, "n_points": int(td.size)}
+
+
 @metric("participant_info",
         dict(participant="structure", key=REQUIRED, **EXACT_PARAMS),
         dict(VALUE_COLUMNS, value=("the participant's READY info value", "as the quantity")), VALUE_ERRORS)
@@ -308,31 +348,37 @@ def window_stat(run_dir, params, context):
 DENSITY_WINDOW_COLUMNS = ("fluid_max_density_error", "max_density_error", "fluid_density_error")
 
 
-@metric("max_density_error", dict(rho0=None, t_start=None, source="auto"),
-        {"max": ("largest |rho / rho0 - 1| of a fluid particle", "-"),
-         "mean": ("mean over windows (or frames) of the largest |rho / rho0 - 1|", "-")}, ("max", "mean"))
+@metric("max_density_error", dict(rho0=None, t_start=None, source="auto", mode="compression"),
+        {"max": ("largest density error of a fluid particle (see mode)", "-"),
+         "mean": ("mean over windows (or frames) of the largest density error", "-")}, ("max", "mean"))
 def max_density_error(run_dir, params, context):
-    """Compressibility error: max over time and fluid particles of |rho_i / rho0 - 1|.
+    """Compressibility error: the largest density error of a fluid particle over the run.
 
-    source = "windows": the participant's per-window statistic (/windows/fluid_max_density_error, or
-    another column in DENSITY_WINDOW_COLUMNS: every sub-step is seen); "frames": recomputed from
-    /frames/fluid/density of fluid particles (kind == 0) at the recorded frames only; "auto": windows if
-    present, else frames. rho0: the param, else the fluid's READY info `rho0`, else 1000 kg/m^3.
-    max = the largest value; mean = the mean over windows/frames of each one's largest value.
+    mode = "compression" (default): e_i = max(rho_i / rho0 - 1, 0), the measure PCISPH's eta and WCSPH's
+    1 % rule bound; "absolute": e_i = |rho_i / rho0 - 1|, which also counts the density deficit of
+    free-surface particles under summation densities (kernel truncation: down to about 0.5 rho0 on the
+    surface of a dam break at any resolution), not a compressibility error.
+    source = "windows": the participant's per-window statistic (a /windows column named in
+    DENSITY_WINDOW_COLUMNS: every sub-step is seen; mode does not apply, the participant's definition
+    does); "frames": from /frames/fluid/density of fluid particles (kind == 0) at the recorded frames
+    only; "auto": windows if present, else frames. rho0: the param, else the fluid's READY info `rho0`,
+    else 1000 kg/m^3. Windows/frames ending before t_start are left out.
+        max = max over time of max_i e_i,   mean = mean over windows/frames of max_i e_i
     """
     t_start = params.get("t_start")
+    if params["source"] not in ("auto", "windows", "frames"):
+        raise MetricError(f"source {params['source']!r}; allowed: auto, windows, frames")
+    if params["mode"] not in ("compression", "absolute"):
+        raise MetricError(f"mode {params['mode']!r}; allowed: compression, absolute")
     with open_record(run_dir) as f:
         w = f.get("windows")
         col = next((c for c in DENSITY_WINDOW_COLUMNS if w is not None and c in w), None)
         if params["source"] == "windows" and col is None:
             raise MetricError("no per-window density error column in /windows")
-        if params["source"] not in ("auto", "windows", "frames"):
-            raise MetricError(f"source {params['source']!r}; allowed: auto, windows, frames")
         if col is not None and params["source"] != "frames":
-            x = np.abs(w[col][:])
+            per = np.abs(w[col][:])
             if t_start is not None:
-                x = x[w["t"][:] >= float(t_start)]
-            per = x
+                per = per[w["t"][:] >= float(t_start)]
         else:
             g = f.get("frames/fluid")
             if g is None or "density" not in g or "kind" not in g:
@@ -347,9 +393,10 @@ def max_density_error(run_dir, params, context):
                 if t_start is not None and times[i] < float(t_start):
                     continue
                 kind = g["kind"][i][..., 0]
-                rho = g["density"][i][..., 0][kind == 0]
-                if rho.size:
-                    per.append(float(np.max(np.abs(rho / float(rho0) - 1.0))))
+                e = g["density"][i][..., 0][kind == 0] / float(rho0) - 1.0
+                if e.size:
+                    per.append(float(np.max(np.abs(e))) if params["mode"] == "absolute"
+                               else max(float(np.max(e)), 0.0))
             per = np.array(per)
     if per.size == 0:
         raise MetricError("no window or frame to measure")

@@ -71,7 +71,8 @@ def find_sphfsi(bin_dir):
             return os.path.abspath(path)
         if bin_dir and c == bin_dir:
             break  # an explicit --bin that has no sphfsi is a mistake, not a hint
-    raise SystemExit(f"sweep: no sphfsi executable in {candidates[0]} (build it, or pass --bin BUILD/bin)")
+    print(f"sweep: no sphfsi executable in {candidates[0]} (build it, or pass --bin BUILD/bin)", file=sys.stderr)
+    return None
 
 
 class Sweeper:
@@ -102,7 +103,7 @@ class Sweeper:
     def run_dir(self, run):
         return os.path.join(self.out, "runs", run.id)
 
-    def previous(self, run):
+    def previous(self, run, reusing=False):
         """The row of an earlier identical run in the output folder, or None."""
         try:
             with open(os.path.join(self.run_dir(run), "result.json")) as f:
@@ -112,14 +113,14 @@ class Sweeper:
         if data.get("id") != run.id or data.get("scene_sha") != self.sw.scene_sha \
                 or data.get("set_args") != run.set_args() or data.get("row", {}).get("status") == "interrupted":
             return None
-        if data.get("build") != self.build_stamp:
+        if reusing and data.get("build") != self.build_stamp:
             self.reused_other_build = True
         return data["row"]
 
     def execute(self, run):
         """Runs one coordinator (or reuses its earlier result under --resume); returns its row."""
         if self.resume:
-            row = self.previous(run)
+            row = self.previous(run, reusing=True)
             if row is not None:
                 row = dict(row)
                 row["reused"] = True
@@ -201,8 +202,7 @@ def progress(i, n, run, row, extra=""):
     print(f"[{i}/{n}] {status:<11} {run.label()}  {cost}{reused}{extra}{msg}", flush=True)
 
 
-def run_grid(sweeper, selected, args):
-    sw = sweeper.sw
+def run_grid(sweeper, selected):
     rows_by_id = {}
     csv_path = os.path.join(sweeper.out, "results.csv")
     n = len(selected)
@@ -244,9 +244,7 @@ def run_grid(sweeper, selected, args):
         if r.id in rows_by_id:
             sweeper.compute_metrics(r, rows_by_id[r.id], infos, "reference")
     snapshot()
-    if interrupted:
-        return rows_by_id, True
-    return rows_by_id, False
+    return rows_by_id, interrupted
 
 
 def describe_columns(sweeper):
@@ -259,7 +257,7 @@ def describe_columns(sweeper):
     return cols
 
 
-def write_description(sweeper, args, started, extra=None):
+def write_description(sweeper, started, extra=None):
     sw = sweeper.sw
     data = {
         "name": sw.name, "title": sw.title, "description": sw.description,
@@ -288,7 +286,7 @@ def draw_charts(sweeper, csv_path):
         for x in sw.chart["x"]:
             prefix = os.path.join(sweeper.out, f"chart-{y}-vs-{x}")
             try:
-                summary = chart.chart_file(csv_path, x, y, sw.chart["series"], prefix,
+                summary = chart.chart_file(csv_path, x, y, sw.chart["series"] or None, prefix,
                                            title=sw.chart["title"], annotate=sw.chart["annotate"])
             except chart.ChartError as err:
                 print(f"sweep: chart {y} vs {x}: {err}", file=sys.stderr)
@@ -308,8 +306,8 @@ def run_bisection(sweeper, selected):
     fail_if = cfg["fail_if"]
     print(f"bisection on {key} in [{cfg['low']}, {cfg['high']}] ({cfg['scale']}"
           f"{', integer' if cfg['integer'] else ''}), rel_tol {cfg['rel_tol']}, at most {cfg['max_runs']} runs "
-          f"each (at most {bisection.bound_on_runs(cfg['low'], cfg['high'], cfg['scale'], cfg['integer'], cfg['rel_tol'])}"
-          " needed)", flush=True)
+          f"each ({bisection.bound_on_runs(cfg['low'], cfg['high'], cfg['scale'], cfg['integer'], cfg['rel_tol'], cfg['confirm'])}"
+          f" for one clean boundary, {cfg['confirm']} confirming probes included)", flush=True)
 
     def target_job(target):
         def probe(value):
@@ -374,16 +372,17 @@ def run_bisection(sweeper, selected):
         row.update(t.settings)
         row.update({"key": key, "passes": s["passes"], "threshold": s["threshold"],
                     "first_failing": s["first_failing"], "rel_width": s["rel_width"], "runs": s["runs"],
-                    "converged": s["converged"], "note": s["note"]})
+                    "converged": s["converged"], "non_monotonic": s["non_monotonic"],
+                    "passes_beyond": " ".join(f"{v!r}" for v in s["passes_beyond"]), "note": s["note"]})
         rows.append(row)
         if s["threshold"] is not None:
             side = "largest passing" if s["passes"] == "below" else "smallest passing"
             print(f"[{t.label() or 'scene'}] {key}: {side} {s['threshold']!r}, first failing {s['first_failing']!r} "
-                  f"(width {100 * s['rel_width']:.2g} %, {s['runs']} runs){'' if s['converged'] else ' ' + s['note']}")
+                  f"(width {100 * s['rel_width']:.2g} %, {s['runs']} runs){'; ' + s['note'] if s['note'] else ''}")
         else:
             print(f"[{t.label() or 'scene'}] {key}: {s['note']}")
     cols = ["target", "case"] + sw.setting_columns + ["key", "passes", "threshold", "first_failing", "rel_width",
-                                                      "runs", "converged", "note"]
+                                                      "runs", "converged", "non_monotonic", "passes_beyond", "note"]
     path = os.path.join(sweeper.out, "thresholds.csv")
     results.write_csv(path, cols, rows)
     print(f"probes: {os.path.join(sweeper.out, 'probes.csv')}\nthresholds: {path}")
@@ -416,8 +415,8 @@ def select(runs, patterns):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog="sweep.py", description=__doc__.split("\n")[0],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = argparse.ArgumentParser(prog="sweep.py", usage=argparse.SUPPRESS, description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter, add_help=True)
     ap.add_argument("sweep_file")
     ap.add_argument("--jobs", type=int)
     ap.add_argument("--out")
@@ -452,6 +451,8 @@ def main(argv=None):
         print("sweep: --check and --print-expect apply to grid sweeps, not to a [bisect] file", file=sys.stderr)
         return 2
     sphfsi = find_sphfsi(args.bin)
+    if sphfsi is None:
+        return 2
     out = os.path.abspath(args.out or os.path.join("out", "sweeps", sw.name))
     os.makedirs(os.path.join(out, "runs"), exist_ok=True)
     jobs = args.jobs or sw.jobs or cores()
@@ -462,17 +463,19 @@ def main(argv=None):
         threads = max(1, cores() // jobs)
     sweeper = Sweeper(sw, out, sphfsi, jobs, threads, args.resume)
     started = datetime.datetime.now().isoformat(timespec="seconds")
-    print(f"sweep {sw.name}: {len(selected)} of {len(sw.runs)} runs of {os.path.relpath(sw.scene)}, {jobs} at a time, "
+    scene = os.path.relpath(sw.scene)
+    scene = sw.scene if scene.startswith("..") else scene
+    print(f"sweep {sw.name}: {len(selected)} of {len(sw.runs)} runs of {scene}, {jobs} at a time, "
           f"OMP_NUM_THREADS={sweeper.env.get('OMP_NUM_THREADS', '(unset)')}, into {out}", flush=True)
 
     if sw.bisect is not None:
         interrupted = run_bisection(sweeper, selected)
-        write_description(sweeper, args, started, {"bisect": sw.bisect})
+        write_description(sweeper, started, {"bisect": sw.bisect})
         return 130 if interrupted else 0
 
-    rows_by_id, interrupted = run_grid(sweeper, selected, args)
+    rows_by_id, interrupted = run_grid(sweeper, selected)
     csv_path = os.path.join(out, "results.csv")
-    write_description(sweeper, args, started)
+    write_description(sweeper, started)
     if sweeper.reused_other_build:
         print("sweep: note: some kept results were made by another build of sphfsi than this one", file=sys.stderr)
     counts = {}

@@ -21,7 +21,7 @@ TOP_LEVEL = {
     "chart": "charts drawn after the sweep: series, x, y, annotate",
     "check": "regression guard settings: tolerance, atol",
     "expect": "[[expect]] recorded values for runs selected by `where`",
-    "bisect": "stability threshold by bisection: key, low, high, rel_tol, max_runs, scale, integer, fail_if",
+    "bisect": "stability threshold by bisection: key, low, high, rel_tol, max_runs, scale, integer, confirm, fail_if",
 }
 SWEEP_KEYS = {
     "scene": "path of the scene file, relative to the sweep file (required)",
@@ -36,7 +36,7 @@ SWEEP_KEYS = {
 CASE_KEYS = {"name", "set", "reference", "expect", "timeout_s", "description"}
 CHART_KEYS = {"series", "x", "y", "annotate", "title"}
 CHECK_KEYS = {"tolerance", "atol"}
-BISECT_KEYS = {"key", "low", "high", "rel_tol", "max_runs", "scale", "integer", "fail_if"}
+BISECT_KEYS = {"key", "low", "high", "rel_tol", "max_runs", "scale", "integer", "fail_if", "confirm"}
 COST_COLUMNS = ("wall_s", "cpu_s", "particle_steps", "element_steps", "record_wall_s")
 
 
@@ -124,7 +124,7 @@ def load(path):
         _check_scene_value(k, v, "[fixed]", fail)
 
     s.axes = []
-    for name, values in _flatten(_table(data, "grid", fail), "[grid]", fail, stop_at_lists=True).items():
+    for name, values in _flatten(_table(data, "grid", fail), "[grid]", fail).items():
         if not isinstance(values, list) or not values:
             fail(f"[grid] {name}: expected a non-empty array of values to sweep, got {values!r}")
         tables = [isinstance(v, dict) for v in values]
@@ -249,6 +249,22 @@ def load(path):
         for k in r.settings:
             if k not in s.setting_columns:
                 s.setting_columns.append(k)
+    for r in s.runs:  # a varied key that [fixed] sets has the fixed value where nothing else sets it
+        for k in s.setting_columns:
+            if k not in r.settings and k in r.overrides:
+                r.settings[k] = r.overrides[k]
+    known = set(s.setting_columns) | {"case"} | {k for r in s.runs for k in r.overrides}
+    if s.bisect is not None:
+        known.add(s.bisect["key"])
+    for k in s.chart["series"]:
+        if k not in known:
+            fail(f"[chart] series: {k!r} is not a setting of this sweep; settings: {', '.join(s.setting_columns)}")
+    for m in s.metrics:
+        for k in m["where"]:
+            if k not in known:
+                fail(f"[[metric]] {m['label']} where: {k!r} is not a setting of this sweep")
+        if m["where"] and not any(matches(r, m["where"]) for r in s.runs) and s.bisect is None:
+            fail(f"[[metric]] {m['label']} where = {m['where']!r} selects no run of this sweep")
     return s
 
 
@@ -339,12 +355,16 @@ def _check_bisect(b, fail):
     max_runs = b.get("max_runs", 20)
     if isinstance(max_runs, bool) or not isinstance(max_runs, int) or max_runs < 3:
         fail(f"[bisect] max_runs: got {max_runs!r}; allowed: an integer >= 3 (two ends and one probe)")
+    confirm = b.get("confirm", 2)
+    if isinstance(confirm, bool) or not isinstance(confirm, int) or confirm < 0:
+        fail(f"[bisect] confirm: got {confirm!r}; allowed: an integer >= 0")
     fail_if = b.get("fail_if", {})
     if not isinstance(fail_if, dict) or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
                                                 for v in fail_if.values()):
         fail("[bisect] fail_if: expected a table of metric column = largest acceptable value")
     return dict(key=key, low=int(low) if integer else float(low), high=int(high) if integer else float(high),
-                integer=integer, scale=scale, rel_tol=float(rel_tol), max_runs=max_runs, fail_if=dict(fail_if))
+                integer=integer, scale=scale, rel_tol=float(rel_tol), max_runs=max_runs, confirm=confirm,
+                fail_if=dict(fail_if))
 
 
 def _check_expect(e, what, fail):
@@ -447,13 +467,14 @@ def run_id(overrides, slug_items, case=""):
     return f"{slug}-{digest}"
 
 
-def _flatten(table, what, fail, stop_at_lists=False, prefix=""):
-    """Nested TOML tables -> dotted keys: [fixed] run.end_time = 1 and "run.end_time" = 1 are the same."""
+def _flatten(table, what, fail, prefix=""):
+    """Nested TOML tables -> dotted keys: [fixed] run.end_time = 1 and "run.end_time" = 1 are the same.
+    Arrays (of values, or of bundle tables) end the path."""
     out = {}
     for k, v in table.items():
         key = f"{prefix}{k}"
         if isinstance(v, dict):
-            out.update(_flatten(v, what, fail, stop_at_lists, key + "."))
+            out.update(_flatten(v, what, fail, key + "."))
         else:
             if key in out:
                 fail(f"{what}: {key} given twice")

@@ -1,0 +1,661 @@
+"""Sweeps, metrics, charts, bisection and the regression guard (tools/sweep.py, docs/sweeps.md), on the
+cantilever scene with the real coordinator and structure participant.
+
+What theory says and the tests hold the tools to:
+  * Hermite beam elements are nodally exact for a tip load: the static tip deflection equals
+    P L^3 / (3 E I) to round-off at every mesh;
+  * the first natural frequency converges from above as O(h^4) with consistent mass;
+  * against a much finer run, newmark and generalized-alpha converge as O(dt^2), backward Euler as O(dt).
+"""
+import csv
+import math
+import os
+import re
+import subprocess
+import sys
+import time
+
+import harness
+
+sys.path.insert(0, os.path.join(harness.ROOT, "tools"))
+import chart  # noqa: E402
+import metrics  # noqa: E402
+from sweeplib import bisect as bisection  # noqa: E402
+from sweeplib import results  # noqa: E402
+from sweeplib import spec as specs  # noqa: E402
+
+SWEEP = os.path.join(harness.ROOT, "tools", "sweep.py")
+BEAM = os.path.join(harness.ROOT, "scenarios", "beam_only.toml")
+GUARD = os.path.join(harness.ROOT, "sweeps", "guard_structure.toml")
+MM_CSV = os.path.join(harness.ROOT, "tests", "fluid", "data", "martin_moyce_1952_front_n2_2.csv")
+EI = 2.1e11 * 0.02 ** 3 / 12
+F1 = 1.87510407 ** 2 / (2 * math.pi) * math.sqrt(EI / (7850.0 * 0.02))
+# The corotational cantilever under a sudden P L^2 / (E I) = 2, undamped: newmark fails above some step.
+BIG_LOAD = {"structure.formulation": "corotational", "structure.point_loads[0].force": [0.0, -2.8e5],
+            "structure.damping.model": "none", "structure.time.integrator": "newmark",
+            "structure.time.resolved_modes": 1, "structure.time.steps_per_period": 2, "run.end_time": 0.3}
+
+
+def sweep(*args, timeout=120):
+    """Runs tools/sweep.py under Debian's interpreter; returns (exit status, stdout + stderr)."""
+    p = subprocess.run(["/usr/bin/python3", SWEEP, *args, "--bin", harness.BIN], capture_output=True, text=True,
+                       timeout=timeout)
+    return p.returncode, p.stdout + p.stderr
+
+
+def write(path, text):
+    with open(path, "w") as f:
+        f.write(text)
+    return path
+
+
+def rows_of(out):
+    with open(os.path.join(out, "results.csv"), newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def num(x):
+    return float(x) if x not in ("", None) else math.nan
+
+
+def order(e_coarse, e_fine):
+    return math.log(e_coarse / e_fine) / math.log(2.0)
+
+
+# ---------------------------------------------------------------------------------------------------
+# The mesh sweep, with a run that fails, one that is invalid and one that never ends.
+
+_MESH = {}
+
+
+def mesh_sweep():
+    if _MESH:
+        return _MESH["out"], _MESH["text"], _MESH["rc"]
+    d = harness.out_dir("sweep-mesh")
+    scene = os.path.relpath(BEAM, d)  # the scene is found relative to the sweep file
+    path = write(os.path.join(d, "mesh.toml"), f'''
+[sweep]
+scene = "{scene}"
+title = "cantilever: mesh"
+timeout_s = 30
+grace_s = 5
+threads_per_run = 1
+
+[fixed]
+"run.end_time" = 0.05
+"structure.initial.static_equilibrium" = true
+
+[grid]
+"structure.members[0].n_elements" = [2, 4, 8]
+"structure.time.integrator" = ["newmark", "backward_euler"]
+
+[[case]]
+name = "newton_starved"
+set = {{ "structure.formulation" = "corotational", "structure.point_loads[0].force" = [0.0, -7e5], "structure.newton.max_iterations" = 2, "structure.initial.static_equilibrium" = false }}
+
+[[case]]
+name = "unknown_integrator"
+set = {{ "structure.time.integrator" = "leapfrog" }}
+
+[[case]]
+name = "endless"
+set = {{ "run.end_time" = 1e4 }}
+timeout_s = 2
+
+[[metric]]
+name = "participant_info"
+label = "f1"
+key = "natural_frequencies_hz.mode_1"
+exact = "1.87510407**2 / (2*pi*L**2) * sqrt(E*I/(rho*A))"
+constants = {{ L = 1.0, E = 2.1e11, rho = 7850.0, t = 0.02, A = "t", I = "t**3/12" }}
+
+[[metric]]
+name = "watchpoint_mean_after"
+label = "static"
+watchpoint = "tip"
+t_start = 0.01
+exact = "P * L**3 / (3 * E * I)"
+constants = {{ P = -100.0, L = 1.0, E = 2.1e11, t = 0.02, I = "t**3 / 12" }}
+
+[chart]
+series = ["structure.time.integrator"]
+x = ["cpu_s", "element_steps"]
+y = ["f1.rel_error"]
+annotate = "structure.members[0].n_elements"
+''')
+    out = os.path.join(d, "out")
+    start = time.time()
+    rc, text = sweep(path, "--out", out, "--jobs", "2")
+    print(text)
+    print(f"mesh sweep: {time.time() - start:.1f} s")
+    _MESH.update(out=out, text=text, rc=rc, path=path)
+    return out, text, rc
+
+
+def test_mesh_sweep_rows_columns_and_errors():
+    out, text, rc = mesh_sweep()
+    assert rc == 0, text
+    rows = rows_of(out)
+    assert len(rows) == 9, [r["run"] for r in rows]  # 3 x 2 grid + 3 cases: one row per run
+    header = list(rows[0])
+    for col in ["run", "case", "structure.members[0].n_elements", "structure.time.integrator", *results.RUN_COLUMNS,
+                "f1.value", "f1.rel_error", "static.value", "static.rel_error", "notes"]:
+        assert col in header, (col, header)
+    assert len({r["run"] for r in rows}) == 9
+    # Run folders: deterministic names, the same as --list prints.
+    rc2, listing = sweep(_MESH["path"], "--list")
+    assert rc2 == 0, listing
+    listed = re.findall(r"^(\S+-[0-9a-f]{8})", listing, re.M)
+    assert listed == [r["run"] for r in rows], (listed, [r["run"] for r in rows])
+    grid = [r for r in rows if not r["case"]]
+    assert len(grid) == 6 and all(r["status"] == "completed" for r in grid), [(r["run"], r["status"]) for r in grid]
+    for r in grid:
+        d = os.path.join(out, "runs", r["run"])
+        assert os.path.isfile(os.path.join(d, "record.h5")) and os.path.isfile(os.path.join(d, "result.json"))
+        wall, cpu = num(r["wall_s"]), num(r["cpu_s"])
+        assert 0 < cpu and 0 < wall < 30, (wall, cpu)
+        # Structure alone: one coupling iteration per window, element-steps = elements x sub-steps, no particles.
+        assert int(r["coupling_iterations"]) == int(r["windows"]) > 0
+        assert int(r["element_steps"]) == int(r["structure_elements"]) * int(r["structure_substeps"])
+        assert int(r["structure_elements"]) == int(r["structure.members[0].n_elements"])
+        assert r["particle_steps"] == "" and r["fluid_particles"] == ""
+        assert abs(num(r["t_end"]) - 0.05) < 1e-12
+        assert abs(num(r["f1.exact"]) - F1) < 1e-9 * F1
+    for integrator in ("newmark", "backward_euler"):
+        series = sorted((int(r["structure.members[0].n_elements"]), r) for r in grid
+                        if r["structure.time.integrator"] == integrator)
+        f1 = [num(r["f1.rel_error"]) for _, r in series]
+        static = [num(r["static.rel_error"]) for _, r in series]
+        print(f"{integrator}: f1 relative errors {['%.3g' % e for e in f1]} for n = 2, 4, 8; "
+              f"static tip deflection errors {['%.2g' % e for e in static]}")
+        # O(h^4): 16 per halving asymptotically; at least 8 here, and errors strictly positive (from above).
+        assert all(e > 0 for e in f1) and f1[0] / f1[1] > 8 and f1[1] / f1[2] > 8, f1
+        # Nodally exact: round-off of the 12 digits watchpoints.csv keeps.
+        assert all(0 <= e < 1e-9 for e in static), static
+        for _, r in series:
+            assert abs(num(r["static.value"]) - (-100.0 / (3 * EI))) < 1e-9 * 100.0 / (3 * EI)
+
+
+def test_watchpoint_against_data():
+    """watchpoint_vs_data on a real run, against data made from its own series plus a known offset."""
+    out, text, rc = mesh_sweep()
+    run = [r for r in rows_of(out) if r["status"] == "completed"][0]["run"]
+    d = os.path.join(out, "runs", run)
+    t, v = metrics.watchpoint_series(d, "tip", "dy")
+    pick = [1, len(t) // 3, len(t) // 2, len(t) - 2]
+    path = write(os.path.join(d, "data.csv"), "# made up: the run's own tip dy plus 1e-6 m\nt,dy\n"
+                 + "".join(f"{t[i]!r},{v[i] + 1e-6!r}\n" for i in pick))
+    ctx = metrics.Context(metrics.RunInfo(run, d), [], d)
+    got = metrics.compute("watchpoint_vs_data", d, {"watchpoint": "tip", "data_csv": "data.csv"}, ctx)
+    scale = max(abs(v[i] + 1e-6) for i in pick)
+    assert got["n_points"] == 4 and abs(got["rms_abs"] - 1e-6) < 1e-15 and abs(got["max_abs"] - 1e-6) < 1e-15, got
+    assert abs(got["l2_rel"] - 1e-6 / scale) < 1e-12 and abs(got["max_rel"] - 1e-6 / scale) < 1e-12, got
+    write(path, "t,dy\n0.0,0.0\n1.0,0.0\n")  # beyond the run's 0.05 s: reported, not extrapolated
+    try:
+        metrics.compute("watchpoint_vs_data", d, {"watchpoint": "tip", "data_csv": "data.csv"}, ctx)
+        raise AssertionError("expected a MetricError")
+    except metrics.MetricError as err:
+        assert "covers" in str(err), err
+
+
+def test_failed_invalid_and_endless_runs_are_rows():
+    out, text, rc = mesh_sweep()
+    by_case = {r["case"]: r for r in rows_of(out) if r["case"]}
+    starved = by_case["newton_starved"]
+    assert starved["status"] == "failed" and starved["exit_code"] == "1", starved
+    assert "not_converged" in starved["message"] and "\n" not in starved["message"], starved["message"]
+    assert starved["f1.rel_error"] == "" and starved["static.rel_error"] == ""  # no errors for failed runs
+    bad = by_case["unknown_integrator"]
+    assert bad["status"] == "invalid" and bad["exit_code"] == "2", bad
+    assert "leapfrog" in bad["message"] and "structure.time.integrator" in bad["message"], bad["message"]
+    endless = by_case["endless"]
+    assert endless["status"] == "timeout", endless
+    # SIGINT at 2 s; the coordinator stops its participant and exits well within the 5 s grace.
+    assert 2.0 <= num(endless["wall_s"]) < 2.0 + 5.0, endless["wall_s"]
+    assert endless["exit_code"] == "130", endless["exit_code"]
+    assert 0 < num(endless["t_end"]) < 1e4 and "stopped at t =" in endless["message"], endless
+    with harness.record(os.path.join(out, "runs", endless["run"], "record.h5")) as f:
+        assert str(f.attrs["status"]).startswith("interrupted"), f.attrs["status"]
+        own = float(f.attrs["coordinator_cpu_s"])
+        compute = float(f["windows/structure_compute_s"][:].sum())
+    # cpu_s holds the participant's CPU too: more than the coordinator's own by at least (a good part of)
+    # the time the participant spent computing.
+    assert num(endless["cpu_s"]) - own > 0.5 * compute > 0, (endless["cpu_s"], own, compute)
+    assert "3 did not complete" in text, text
+
+
+def test_charts_are_written():
+    out, text, rc = mesh_sweep()
+    for x in ("cpu_s", "element_steps"):
+        prefix = os.path.join(out, f"chart-f1.rel_error-vs-{x}")
+        with open(prefix + ".png", "rb") as f:
+            png = f.read()
+        assert png.startswith(b"\x89PNG") and len(png) > 20000, len(png)
+        with open(prefix + ".svg") as f:
+            svg = f.read()
+        assert "<svg" in svg and len(svg) > 20000
+    # The command line, with a filter: the backward-Euler series alone, three points, Pareto front of 1 to 3.
+    prefix = os.path.join(out, "cli")
+    p = subprocess.run(["/usr/bin/python3", os.path.join(harness.ROOT, "tools", "chart.py"),
+                        os.path.join(out, "results.csv"), "--x", "element_steps", "--y", "f1.rel_error",
+                        "--series", "structure.time.integrator", "--where", "structure.time.integrator=backward_euler",
+                        "--out", prefix], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 0, p.stderr
+    assert "3 runs in 1 series, 0 did not complete" in p.stdout, p.stdout
+    assert os.path.getsize(prefix + ".png") > 10000 and os.path.getsize(prefix + ".svg") > 10000
+    # Refinement costs more and errs less: all three points are on the front.
+    front = p.stdout.split("Pareto front", 1)[1].strip().splitlines()[1:]
+    assert len(front) == 3 and all("integrator=backward_euler" in line for line in front), p.stdout
+
+
+FAKE_COORDINATOR = r'''
+import os, signal, subprocess, sys, time
+# A coordinator that ignores SIGINT, with a "participant" in its own process group that ignores SIGINT and
+# SIGTERM and burns CPU: only SIGKILL ends them.
+signal.signal(signal.SIGINT, signal.SIG_IGN)
+out = sys.argv[sys.argv.index("--out") + 1]
+child = subprocess.Popen([sys.executable, "-c", "import signal\nsignal.signal(signal.SIGINT, signal.SIG_IGN)\n"
+                          "signal.signal(signal.SIGTERM, signal.SIG_IGN)\nwhile True: pass"], start_new_session=True)
+with open(os.path.join(out, "child.pid"), "w") as f:
+    f.write(str(child.pid))
+while True:
+    time.sleep(0.05)
+'''
+
+
+def test_runner_kills_what_ignores_sigint():
+    from sweeplib import runner
+    d = harness.out_dir("sweep-kill")
+    fake = write(os.path.join(d, "fake_sphfsi"), "#!/usr/bin/python3\n" + FAKE_COORDINATOR)
+    os.chmod(fake, 0o755)
+    out = os.path.join(d, "run")
+    res = runner.run_coordinator(fake, BEAM, out, [], timeout_s=1.0, grace_s=1.0)
+    with open(os.path.join(out, "child.pid")) as f:
+        child = int(f.read())
+    time.sleep(0.2)
+    assert not harness.pid_alive(child), "the participant outlived the SIGKILL"
+    assert res.timed_out and res.killed and res.exit_code == -9, vars(res)
+    assert 2.0 <= res.wall_s < 3.0, res.wall_s
+    # The participant was never reaped by the coordinator: its CPU (about 1.5 s of a busy loop, less on a
+    # loaded machine) was read from /proc before the kill.
+    assert res.extra_cpu > 0.2 and res.cpu_s >= res.extra_cpu, vars(res)
+
+
+def test_pareto_front():
+    pts = [(1.0, 5.0), (2.0, 3.0), (2.0, 4.0), (3.0, 3.5), (4.0, 1.0), (5.0, 1.0), (0.5, 9.0), (4.0, 1.0)]
+    front = chart.pareto_front(pts)
+    assert [pts[i] for i in front] == [(0.5, 9.0), (1.0, 5.0), (2.0, 3.0), (4.0, 1.0)], [pts[i] for i in front]
+    assert chart.pareto_front([]) == []
+    assert abs(chart.loglog_slope([1, 10, 100], [1, 0.01, 1e-4]) + 2) < 1e-12
+
+
+# ---------------------------------------------------------------------------------------------------
+
+
+def test_time_step_convergence_orders():
+    d = harness.out_dir("sweep-dt")
+    path = write(os.path.join(d, "dt.toml"), f'''
+[sweep]
+scene = "{BEAM}"
+timeout_s = 60
+threads_per_run = 1
+
+[fixed]
+"run.end_time" = 0.1
+"structure.time.resolved_modes" = 1
+"structure.time.steps_per_period" = 2
+"structure.time.max_numerical_damping" = 0.5
+
+[grid]
+"structure.time.integrator" = ["newmark", "backward_euler"]
+"structure.time.dt_max" = [1e-3, 5e-4, 2.5e-4]
+
+[[case]]
+name = "reference"
+reference = true
+set = {{ "structure.time.integrator" = "newmark", "structure.time.dt_max" = 1.5625e-5 }}
+
+[[metric]]
+name = "watchpoint_vs_reference_run"
+label = "tip"
+watchpoint = "tip"
+
+[chart]
+series = ["structure.time.integrator"]
+x = ["cpu_s"]
+''')
+    out = os.path.join(d, "out")
+    rc, text = sweep(path, "--out", out, "--jobs", "2")
+    assert rc == 0, text
+    rows = rows_of(out)
+    assert len(rows) == 7
+    ref = [r for r in rows if r["case"] == "reference"][0]
+    assert ref["status"] == "completed" and ref["tip.l2_rel"] == ""  # nothing against itself
+    err = {}
+    for r in rows:
+        if r["case"]:
+            continue
+        assert r["status"] == "completed", r
+        assert int(r["tip.n_times"]) >= 11  # at least the 11 frames
+        err[(r["structure.time.integrator"], num(r["structure.time.dt_max"]))] = num(r["tip.l2_rel"])
+    nm = [err[("newmark", dt)] for dt in (1e-3, 5e-4, 2.5e-4)]
+    be = [err[("backward_euler", dt)] for dt in (1e-3, 5e-4, 2.5e-4)]
+    print(f"newmark L2 errors {['%.3g' % e for e in nm]}, orders {order(nm[0], nm[1]):.2f} {order(nm[1], nm[2]):.2f}")
+    print(f"backward Euler L2 errors {['%.3g' % e for e in be]}, orders {order(be[0], be[1]):.2f} {order(be[1], be[2]):.2f}")
+    assert 1.7 < order(nm[1], nm[2]) < 2.3 and order(nm[0], nm[1]) > 1.5, nm
+    assert 0.7 < order(be[1], be[2]) < 1.3 and order(be[0], be[1]) > 0.6, be
+    assert all(n < b for n, b in zip(nm, be))
+    assert os.path.getsize(os.path.join(out, "chart-tip.l2_rel-vs-cpu_s.png")) > 10000
+
+
+# ---------------------------------------------------------------------------------------------------
+
+
+def test_bisection_finds_the_stability_limit():
+    d = harness.out_dir("sweep-bisect")
+    fixed = "\n".join(f'"{k}" = {specs.toml_value(v)}' for k, v in BIG_LOAD.items())
+    path = write(os.path.join(d, "bisect.toml"), f'''
+[sweep]
+scene = "{BEAM}"
+timeout_s = 60
+threads_per_run = 1
+
+[fixed]
+{fixed}
+
+[bisect]
+key = "structure.time.dt_max"
+low = 1e-4
+high = 5e-3
+rel_tol = 0.1
+max_runs = 12
+''')
+    out = os.path.join(d, "out")
+    rc, text = sweep(path, "--out", out)
+    print(text)
+    assert rc == 0, text
+    with open(os.path.join(out, "thresholds.csv")) as f:
+        th = list(csv.DictReader(f))
+    assert len(th) == 1, th
+    t, bad = num(th[0]["threshold"]), num(th[0]["first_failing"])
+    assert th[0]["passes"] == "below" and th[0]["converged"] == "true", th[0]
+    assert 0 < bad - t <= 0.1 * t, (t, bad)
+    runs = int(th[0]["runs"])
+    assert runs <= 12, runs
+    with open(os.path.join(out, "probes.csv")) as f:
+        probes = list(csv.DictReader(f))
+    assert len(probes) == runs
+    beyond = [num(v) for v in th[0]["passes_beyond"].split()]
+    for p in probes:  # every probe up to the threshold passed; above it, passes only where reported
+        v = num(p["value"])
+        if v <= t:
+            assert p["passed"] == "true", (v, p["status"], p["message"])
+        elif v <= bad or p["passed"] != "true":
+            assert p["passed"] != "true" and p["status"] == "failed" and p["message"], p
+        else:
+            assert th[0]["non_monotonic"] == "true" and v in beyond, (v, th[0])
+    assert any(num(p["value"]) == bad and p["passed"] == "false" for p in probes)
+    # Independently of the tool: the coordinator completes at the threshold and fails just above it.
+    base = [x for k, v in BIG_LOAD.items() for x in ("--set", f"{k}={specs.toml_value(v)}")]
+    code, msg = harness.sphfsi("run", BEAM, "--out", os.path.join(d, "at"), "--quiet", *base,
+                               "--set", f"structure.time.dt_max={t!r}")
+    assert code == 0, msg
+    code, msg = harness.sphfsi("run", BEAM, "--out", os.path.join(d, "above"), "--quiet", *base,
+                               "--set", f"structure.time.dt_max={bad!r}")
+    assert code == 1 and "not_converged" in msg, msg
+    assert os.path.getsize(os.path.join(out, "thresholds.png")) > 5000
+    print(f"newmark, corotational, P L^2/EI = 2: stable up to dt = {t:g} s, fails at {bad:g} s ({runs} runs)")
+
+
+def test_integer_bisection_upwards():
+    """Newton's iteration cap: too few iterations fail, so the smallest passing value is sought."""
+    d = harness.out_dir("sweep-bisect-int")
+    path = write(os.path.join(d, "newton.toml"), f'''
+[sweep]
+scene = "{BEAM}"
+timeout_s = 60
+
+[fixed]
+"structure.formulation" = "corotational"
+"structure.point_loads[0].force" = [0.0, -7e5]
+"run.end_time" = 0.02
+
+[bisect]
+key = "structure.newton.max_iterations"
+low = 1
+high = 25
+''')
+    out = os.path.join(d, "out")
+    rc, text = sweep(path, "--out", out)
+    assert rc == 0, text
+    with open(os.path.join(out, "thresholds.csv")) as f:
+        th = list(csv.DictReader(f))[0]
+    n, bad = int(th["threshold"]), int(th["first_failing"])
+    assert th["passes"] == "above" and th["converged"] == "true" and bad == n - 1, th
+    # A clean boundary: bisection from both ends, then two confirming probes below (n - 1 is the failing one).
+    assert int(th["runs"]) <= bisection.bound_on_runs(1, 25, "linear", True, 0.05, 2) and th["non_monotonic"] == "false", th
+    sets = ["--set", "structure.formulation=corotational", "--set", "structure.point_loads[0].force=[0.0, -7e5]",
+            "--set", "run.end_time=0.02"]
+    code, msg = harness.sphfsi("run", BEAM, "--out", os.path.join(d, "n"), "--quiet", *sets,
+                               "--set", f"structure.newton.max_iterations={n}")
+    assert code == 0, msg
+    code, msg = harness.sphfsi("run", BEAM, "--out", os.path.join(d, "n-1"), "--quiet", *sets,
+                               "--set", f"structure.newton.max_iterations={n - 1}")
+    assert code == 1 and "not_converged" in msg, msg
+    print(f"smallest Newton cap that completes: {n} ({th['runs']} runs)")
+
+
+def test_bisection_helpers():
+    assert bisection.midpoint(1e-4, 1e-2, "log", False, 0.1) == 1e-3
+    assert bisection.midpoint(3, 4, "linear", True, 0.1) is None
+    assert bisection.midpoint(1, 25, "linear", True, 0.1) == 13
+    seen = []
+
+    def probe(v):  # a synthetic method, stable below 0.37
+        seen.append(v)
+        return v < 0.37, {}
+    cfg = dict(low=0.01, high=1.0, rel_tol=0.01, max_runs=30, scale="log", integer=False)
+    s = bisection.bisect(cfg, probe)
+    assert s["converged"] and s["threshold"] < 0.37 <= s["first_failing"] <= s["threshold"] * 1.01, s
+    assert len(seen) == s["runs"] <= bisection.bound_on_runs(0.01, 1.0, "log", False, 0.01, 2)
+    assert not s["non_monotonic"] and s["passes"] == "below"
+    s = bisection.bisect(dict(cfg, low=0.5), probe)
+    assert s["threshold"] is None and "neither" in s["note"], s
+
+    def ragged(v):  # stable below 0.345, unstable in [0.345, 0.35), stable again in [0.35, 0.37)
+        return v < 0.345 or 0.35 <= v < 0.37, {}
+    s = bisection.bisect(dict(cfg, confirm=8, max_runs=40), ragged)
+    # Bisection alone lands at 0.37; the probes just below it find the gap and the threshold moves to 0.345.
+    assert s["non_monotonic"] and s["passes_beyond"] and s["threshold"] < 0.345 <= s["first_failing"], s
+    assert s["first_failing"] <= 0.345 * 1.01 + 1e-12 and s["converged"], s
+
+    def upward(v):  # an iteration cap: 7 and more pass
+        return v >= 7, {}
+    s = bisection.bisect(dict(low=1, high=50, rel_tol=0.05, max_runs=20, scale="linear", integer=True), upward)
+    assert (s["passes"], s["threshold"], s["first_failing"]) == ("above", 7, 6), s
+
+
+# ---------------------------------------------------------------------------------------------------
+
+
+def test_guard_passes_and_catches_regressions():
+    d = harness.out_dir("sweep-guard")
+    out = os.path.join(d, "out")
+    rc, text = sweep(GUARD, "--out", out, "--check")
+    print(text)
+    assert rc == 0 and "check: 9 guarded run(s) as recorded" in text, text
+    rows = {r["case"]: r for r in rows_of(out)}
+    measured = num(rows["newmark_dt1e-3"]["tip.l2_rel"])
+    with open(GUARD) as f:
+        body = f.read().replace('scene = "../scenarios/beam_only.toml"', f'scene = "{BEAM}"')
+
+    def guarded(recorded, name):
+        path = write(os.path.join(d, name + ".toml"), body + f'''
+[[expect]]
+where = {{ case = "newmark_dt1e-3" }}
+"tip.l2_rel" = {recorded!r}
+''')
+        return sweep(path, "--out", out, "--check", "--resume", "--no-charts")
+
+    # The measured value 15 % above the recorded one passes, 25 % above fails: the 20 % rule.
+    rc, text = guarded(measured / 1.15, "loose")
+    assert rc == 0, text
+    assert text.count("(kept)") == 9, text  # --resume: nothing re-run, metrics recomputed
+    rc, text = guarded(measured / 1.25, "tight")
+    assert rc == 1, text
+    assert re.search(r"check: FAIL newmark_dt1e-3: tip\.l2_rel = \S+, recorded \S+: \+25\.0 %", text), text
+    # A run expected to complete that does not.
+    path = write(os.path.join(d, "starved.toml"), body + '''
+[[case]]
+name = "starved"
+set = { "structure.formulation" = "corotational", "structure.point_loads[0].force" = [0.0, -7e5], "structure.newton.max_iterations" = 1 }
+expect = { status = "completed" }
+''')
+    rc, text = sweep(path, "--out", out, "--check", "--only", "starved", "--no-charts")
+    assert rc == 1 and "check: FAIL starved: status 'failed', expected 'completed'" in text, text
+
+
+def test_sweep_file_mistakes_stop_before_running():
+    d = harness.out_dir("sweep-bad")
+    cases = {
+        "unknown key": ('[sweep]\nscene = "{s}"\nscenery = 1\n[grid]\n"run.end_time" = [0.1]\n', "unknown key(s) 'scenery'"),
+        "no scene": ('[sweep]\nscene = "nowhere.toml"\n[grid]\n"run.end_time" = [0.1]\n', "no such file"),
+        "grid not an array": ('[sweep]\nscene = "{s}"\n[grid]\n"run.end_time" = 0.1\n', "expected a non-empty array"),
+        "unknown metric": ('[sweep]\nscene = "{s}"\n[grid]\n"run.end_time" = [0.1]\n[[metric]]\nname = "magic"\n',
+                           "unknown metric 'magic'"),
+        "metric parameter": ('[sweep]\nscene = "{s}"\n[grid]\n"run.end_time" = [0.1]\n[[metric]]\n'
+                             'name = "watchpoint_final"\nwatchpoint = "tip"\nexact = 1.0\ncomponant = "dy"\n',
+                             "unknown parameter(s) componant"),
+        "two references": ('[sweep]\nscene = "{s}"\n[[case]]\nreference = true\n[[case]]\nname = "b"\nreference = true\n',
+                           "more than one [[case]] has reference = true"),
+    }
+    for name, (body, needle) in cases.items():
+        path = write(os.path.join(d, name.replace(" ", "_") + ".toml"), body.replace("{s}", BEAM))
+        rc, text = sweep(path, "--out", os.path.join(d, "out"))
+        assert rc == 2 and needle in text, (name, rc, text)
+    assert not os.listdir(os.path.join(d, "out", "runs")) if os.path.isdir(os.path.join(d, "out")) else True
+
+
+def test_override_values_round_trip():
+    import tomllib
+    for v in [0.001, 1e-05, 2.0, 7, -3, True, "wcsph", [0.0, -9.81], 1e300, 'a "quoted" word']:
+        text = specs.toml_value(v)
+        assert tomllib.loads(f"v = {text}")["v"] == v, (v, text)
+    assert specs.toml_value(2.0) == "2.0" and specs.toml_value(2) == "2"  # integers stay integers
+
+
+# ---------------------------------------------------------------------------------------------------
+# The surge-front metric on a record built by hand, then on the real fluid participant if it is built.
+
+
+def test_surge_front_metric_on_a_constructed_record():
+    import h5py
+    import numpy as np
+    a, g, dp = 0.1, 9.81, 0.0025
+    scale = math.sqrt(2 * g / a)
+    Tref, Zref = metrics.read_reference_curve(MM_CSV)
+    d = harness.out_dir("surge")
+    # A fluid block whose front (last centre + dp/2) is 10 % ahead of the experiment at every reference T,
+    # plus a lone droplet far ahead and wall particles further right, which must not count.
+    T = np.concatenate([Tref[Tref <= 2.6], np.linspace(0.0, 2.6, 27)])
+    T = np.unique(T)
+    frames = []
+    for Ti in T:
+        Z = 1.1 * np.interp(Ti, np.concatenate([[0.0], Tref]), np.concatenate([[1.0 / 1.1], Zref]))
+        front = Z * a - dp / 2
+        xs = np.arange(front, front - 0.05, -dp)
+        ys = np.arange(dp / 2, 0.02, dp)
+        block = np.array([(x, y) for x in xs for y in ys])
+        droplet = np.array([[front + 10 * dp, 0.05]])
+        wall = np.array([[0.6, y] for y in ys])
+        frames.append((np.vstack([block, droplet, wall]),
+                       np.array([0] * len(block) + [0] + [1] * len(wall), dtype=np.int32)))
+    n = max(len(p) for p, _ in frames)
+    with h5py.File(os.path.join(d, "record.h5"), "w") as f:
+        f.attrs["status"] = "completed"
+        f.create_group("participants/fluid").attrs["dp"] = dp
+        pos = f.create_dataset("frames/fluid/position", (len(T), n, 2), dtype="float64")
+        kind = f.create_dataset("frames/fluid/kind", (len(T), n, 1), dtype="int32")
+        f["frames/fluid/time"] = T / scale
+        for i, (p, k) in enumerate(frames):
+            full_p = np.full((n, 2), -1.0)  # padding rows: wall particles far left
+            full_k = np.ones((n,), dtype=np.int32)
+            full_p[:len(p)], full_k[:len(k)] = p, k
+            pos[i] = full_p
+            kind[i] = full_k[:, None]
+    ctx = metrics.Context(metrics.RunInfo("r", d), [], harness.ROOT)
+    out = metrics.compute("surge_front", d, {"a": a, "reference_csv": MM_CSV}, ctx)
+    assert out["n_points"] == 9, out
+    assert abs(out["mean_rel"] - 0.1) < 1e-9 and abs(out["max_rel"] - 0.1) < 1e-9, out
+    assert abs(out["mean_signed_rel"] - 0.1) < 1e-9, out
+    # Without the neighbour rule the droplet is taken for the front.
+    bad = metrics.compute("surge_front", d, {"a": a, "reference_csv": MM_CSV, "k_neighbours": 0}, ctx)
+    assert bad["max_rel"] > 0.15, bad
+    # Frames that stop early are reported, not extrapolated.
+    try:
+        metrics.compute("surge_front", d, {"a": a, "reference_csv": MM_CSV, "T_max": 3.0}, ctx)
+        raise AssertionError("expected a MetricError: the frames stop at T = 2.6")
+    except metrics.MetricError as err:
+        assert "reach" in str(err), err
+
+
+def test_fluid_sweep_counts_particle_steps():
+    assert os.path.isfile(os.path.join(harness.BIN, "sphfsi-fluid")), "the fluid participant is not built"
+    d = harness.out_dir("sweep-fluid")
+    scene = os.path.join(harness.ROOT, "scenarios", "dam_break.toml")
+    path = write(os.path.join(d, "fluid.toml"), f'''
+[sweep]
+scene = "{scene}"
+timeout_s = 120
+threads_per_run = 1
+
+[fixed]
+"run.end_time" = 0.19
+"run.output_interval" = 0.005
+
+[grid]
+"fluid.dp" = [0.01, 0.005]
+
+[[metric]]
+name = "surge_front"
+label = "front"
+a = 0.1
+reference_csv = "{MM_CSV}"
+
+[[metric]]
+name = "max_density_error"
+label = "density"
+''')
+    out = os.path.join(d, "out")
+    rc, text = sweep(path, "--out", out, "--jobs", "2")
+    print(text)
+    assert rc == 0, text
+    for r in rows_of(out):
+        assert r["status"] == "completed", r
+        with harness.record(os.path.join(out, "runs", r["run"], "record.h5")) as f:
+            fluid_now = int((f["frames/fluid/kind"][0][:, 0] == 0).sum())
+            substeps = int(f["windows/fluid_substeps"][:].sum())
+        assert int(r["fluid_particles"]) == fluid_now
+        assert int(r["particle_steps"]) == fluid_now * substeps == int(r["fluid_particles"]) * int(r["fluid_substeps"])
+        assert int(r["front.n_points"]) == 9
+        # WCSPH leads the gate-delayed experiment by 10-20 % (tests/fluid/test_dam_break.cpp).
+        assert 0 < num(r["front.mean_rel"]) < 0.25, r["front.mean_rel"]
+        assert 0 < num(r["density.max"]) < 0.05, r["density.max"]
+
+
+# ---------------------------------------------------------------------------------------------------
+
+
+def test_docs_describe_every_column_and_metric():
+    with open(os.path.join(harness.ROOT, "docs", "sweeps.md")) as f:
+        doc = f.read()
+    for col in results.RUN_COLUMNS:
+        assert f"`{col}`" in doc, f"docs/sweeps.md does not describe the column {col}"
+    for name in metrics.METRICS:
+        assert f"`{name}`" in doc, f"docs/sweeps.md does not describe the metric {name}"
+    for key in list(specs.SWEEP_KEYS) + list(specs.BISECT_KEYS):
+        assert f"`{key}`" in doc, f"docs/sweeps.md does not describe the key {key}"
+
+
+if __name__ == "__main__":
+    harness.main(globals())
