@@ -35,8 +35,9 @@ void Handle::reset() {
     id_ = -1;
 }
 
-Series::Series(hid_t parent, const std::string& path, std::vector<hsize_t> row_shape, bool is_int, hsize_t rows_per_chunk)
-    : row_shape_(std::move(row_shape)), is_int_(is_int) {
+Series::Series(hid_t parent, const std::string& path, std::vector<hsize_t> row_shape, bool is_int, hsize_t rows_per_chunk,
+               bool compress)
+    : path_(path), row_shape_(std::move(row_shape)), is_int_(is_int) {
     std::vector<hsize_t> dims{0}, maxdims{H5S_UNLIMITED}, chunk{rows_per_chunk};
     for (hsize_t s : row_shape_) {
         dims.push_back(s);
@@ -46,15 +47,17 @@ Series::Series(hid_t parent, const std::string& path, std::vector<hsize_t> row_s
     Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), maxdims.data()), H5Sclose, "create space");
     Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "create dataset properties");
     H5Pset_chunk(dcpl.get(), static_cast<int>(chunk.size()), chunk.data());
-    H5Pset_shuffle(dcpl.get());
-    H5Pset_deflate(dcpl.get(), 1);  // cheap compression: frames are written while the run goes on
+    if (compress) {
+        H5Pset_shuffle(dcpl.get());
+        H5Pset_deflate(dcpl.get(), 1);  // cheap compression: frames are written while the run goes on
+    }
     Handle lcpl = link_creation_props();
     ds_ = Handle(H5Dcreate2(parent, path.c_str(), is_int ? H5T_STD_I32LE : H5T_IEEE_F64LE, space.get(), lcpl.get(),
                             dcpl.get(), H5P_DEFAULT),
                  H5Dclose, "create dataset " + path);
 }
 
-Series::Series(hid_t parent, const std::string& path) {
+Series::Series(hid_t parent, const std::string& path) : path_(path) {
     ds_ = Handle(H5Dopen2(parent, path.c_str(), H5P_DEFAULT), H5Dclose, "open dataset " + path);
     Handle space(H5Dget_space(ds_.get()), H5Sclose, "get space");
     int rank = H5Sget_simple_extent_ndims(space.get());
@@ -74,25 +77,51 @@ void Series::append(const void* rows, hsize_t count) {
         start.push_back(0);
         n.push_back(s);
     }
-    check(H5Dset_extent(ds_.get(), dims.data()), "extend dataset", 0);
+    check(H5Dset_extent(ds_.get(), dims.data()), "extend " + path_, 0);
     Handle file_space(H5Dget_space(ds_.get()), H5Sclose, "get space");
     H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start.data(), nullptr, n.data(), nullptr);
     Handle mem_space(H5Screate_simple(static_cast<int>(n.size()), n.data(), nullptr), H5Sclose, "create space");
     check(H5Dwrite(ds_.get(), is_int_ ? H5T_NATIVE_INT32 : H5T_NATIVE_DOUBLE, mem_space.get(), file_space.get(), H5P_DEFAULT, rows),
-          "write rows", 0);
+          "write rows of " + path_, 0);
     rows_ += count;
 }
 
-void Series::truncate(hsize_t rows) {
-    if (rows >= rows_) return;
-    std::vector<hsize_t> dims{rows};
-    for (hsize_t s : row_shape_) dims.push_back(s);
-    check(H5Dset_extent(ds_.get(), dims.data()), "truncate dataset", 0);
-    rows_ = rows;
+void Series::read(void* rows, hsize_t count) const {
+    if (count == 0) return;
+    std::vector<hsize_t> start{0}, n{count};
+    for (hsize_t d : row_shape_) {
+        start.push_back(0);
+        n.push_back(d);
+    }
+    Handle file_space(H5Dget_space(ds_.get()), H5Sclose, "get space");
+    H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start.data(), nullptr, n.data(), nullptr);
+    Handle mem_space(H5Screate_simple(static_cast<int>(n.size()), n.data(), nullptr), H5Sclose, "create space");
+    check(H5Dread(ds_.get(), is_int_ ? H5T_NATIVE_INT32 : H5T_NATIVE_DOUBLE, mem_space.get(), file_space.get(), H5P_DEFAULT, rows),
+          "read rows of " + path_, 0);
+}
+
+std::size_t Series::row_bytes() const {
+    std::size_t n = is_int_ ? sizeof(std::int32_t) : sizeof(double);
+    for (hsize_t d : row_shape_) n *= d;
+    return n;
 }
 
 Handle create_file(const std::string& path) {
-    return Handle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose, "create " + path);
+    // Metadata reaches the disk only when we flush (after each frame): with evictions off, the cache never
+    // writes a half-updated index in between, so a kill at any moment leaves the state of the last flush.
+    Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "create file access properties");
+    H5AC_cache_config_t mdc;
+    mdc.version = H5AC__CURR_CACHE_CONFIG_VERSION;
+    H5Pget_mdc_config(fapl.get(), &mdc);
+    mdc.evictions_enabled = false;
+    mdc.incr_mode = H5C_incr__off;
+    mdc.flash_incr_mode = H5C_flash_incr__off;
+    mdc.decr_mode = H5C_decr__off;
+    mdc.set_initial_size = true;
+    mdc.initial_size = 16 * 1024 * 1024;
+    mdc.max_size = 64 * 1024 * 1024;
+    H5Pset_mdc_config(fapl.get(), &mdc);
+    return Handle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose, "create " + path);
 }
 
 Handle open_file_rw(const std::string& path) {
@@ -143,6 +172,42 @@ bool exists(hid_t parent, const std::string& path) {
         pos = slash + 1;
     }
     return true;
+}
+
+std::vector<std::string> children(hid_t file, const std::string& group) {
+    std::vector<std::string> names;
+    if (!exists(file, group)) return names;
+    H5Literate_by_name(
+        file, group.c_str(), H5_INDEX_NAME, H5_ITER_INC, nullptr,
+        [](hid_t, const char* name, const H5L_info_t*, void* out) -> herr_t {
+            static_cast<std::vector<std::string>*>(out)->push_back(name);
+            return 0;
+        },
+        &names, H5P_DEFAULT);
+    return names;
+}
+
+void copy_object(hid_t source, hid_t target, const std::string& path) {
+    check(H5Ocopy(source, path.c_str(), target, path.c_str(), H5P_DEFAULT, H5P_DEFAULT), "copy " + path, 0);
+}
+
+void copy_root_attributes(hid_t source, hid_t target) {
+    H5Aiterate2(
+        source, H5_INDEX_NAME, H5_ITER_NATIVE, nullptr,
+        [](hid_t loc, const char* name, const H5A_info_t*, void* out) -> herr_t {
+            hid_t dst = *static_cast<hid_t*>(out);
+            Handle attr(H5Aopen(loc, name, H5P_DEFAULT), H5Aclose, std::string("open attribute ") + name);
+            Handle type(H5Aget_type(attr.get()), H5Tclose, "attribute type");
+            Handle space(H5Aget_space(attr.get()), H5Sclose, "attribute space");
+            Handle copy(H5Acreate2(dst, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
+                        std::string("create attribute ") + name);
+            std::vector<unsigned char> buf(H5Tget_size(type.get()) * static_cast<std::size_t>(H5Sget_simple_extent_npoints(space.get())));
+            H5Aread(attr.get(), type.get(), buf.data());
+            H5Awrite(copy.get(), type.get(), buf.data());
+            if (H5Tis_variable_str(type.get()) > 0) H5Dvlen_reclaim(type.get(), space.get(), H5P_DEFAULT, buf.data());
+            return 0;
+        },
+        &target);
 }
 
 }  // namespace sphfsi::coordinator::h5

@@ -1,6 +1,7 @@
 #include "sphfsi/coordinator/recorder.hpp"
 
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -35,41 +36,62 @@ Recorder::Recorder(std::filesystem::path file, const RunMetadata& meta, std::opt
         flush();
         return;
     }
-    h5_ = h5::open_file_rw(file_.string());
-    // Drop what was written after the checkpoint, so the resumed run continues one clean history.
-    auto cut = [&](const std::string& time_path, const std::vector<std::string>& paths) {
-        if (!h5::exists(h5_.get(), time_path)) return;
-        h5::Series time(h5_.get(), time_path);
-        std::vector<double> t(time.rows());
-        if (!t.empty()) {
-            h5::Handle ds(H5Dopen2(h5_.get(), time_path.c_str(), H5P_DEFAULT), H5Dclose, "open " + time_path);
-            H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, t.data());
-        }
-        hsize_t keep = 0;
-        while (keep < t.size() && t[keep] <= *resume_at * (1 + 1e-12)) ++keep;
-        for (const auto& p : paths)
-            if (h5::exists(h5_.get(), p)) h5::Series(h5_.get(), p).truncate(keep);
-        return;
-    };
-    auto children = [&](const std::string& group) {
-        std::vector<std::string> names;
-        if (!h5::exists(h5_.get(), group)) return names;
-        h5::Handle g(H5Gopen2(h5_.get(), group.c_str(), H5P_DEFAULT), H5Gclose, "open " + group);
-        hsize_t n = 0;
-        H5Gget_num_objs(g.get(), &n);
-        for (hsize_t i = 0; i < n; ++i) {
-            char name[256];
-            H5Gget_objname_by_idx(g.get(), i, name, sizeof name);
-            names.push_back(group + "/" + name);
-        }
-        return names;
-    };
-    std::vector<std::string> window_paths = children("/windows");
-    for (const auto& p : children("/interface"))
-        if (p != "/interface/vertices" && p != "/interface/cells") window_paths.push_back(p);
-    cut("/windows/t", window_paths);
-    for (const auto& role_group : children("/frames")) cut(role_group + "/time", children(role_group));
+    // The interrupted run may have been killed in the middle of a write, so its file is not appended
+    // to: what it holds up to the checkpoint is copied into a fresh file, and the run goes on there.
+    auto interrupted = file_;
+    interrupted += ".interrupted";
+    std::filesystem::rename(file_, interrupted);
+    h5_ = h5::create_file(file_.string());
+    copy_history(interrupted, *resume_at);
+    std::filesystem::remove(interrupted);
     set_status("running (resumed)");
+    flush();
+}
+
+// Copies the interrupted run's record up to time `until`: the scene, participants and root attributes
+// whole; windows, interface history and frames row by row, up to the last one at or before `until`.
+void Recorder::copy_history(const std::filesystem::path& old_file, double until) {
+    h5::Handle src(H5Fopen(old_file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose, "open " + old_file.string());
+    for (const char* path : {"/scene", "/participants"})
+        if (h5::exists(src.get(), path)) h5::copy_object(src.get(), h5_.get(), path);
+    h5::copy_root_attributes(src.get(), h5_.get());
+    auto read_all = [&](const std::string& path) {
+        h5::Series s(src.get(), path);
+        std::vector<double> v(s.rows());
+        s.read(v.data(), s.rows());
+        return v;
+    };
+    auto rows_until = [&](const std::string& time_path) -> hsize_t {
+        if (!h5::exists(src.get(), time_path)) return 0;
+        std::vector<double> t = read_all(time_path);
+        hsize_t keep = 0;
+        while (keep < t.size() && t[keep] <= until * (1 + 1e-12)) ++keep;
+        return keep;
+    };
+    auto copy_rows = [&](const std::string& path, hsize_t keep, hsize_t chunk_rows) {
+        h5::Series s(src.get(), path);
+        keep = std::min(keep, s.rows());
+        std::vector<unsigned char> buf(keep * s.row_bytes());
+        s.read(buf.data(), keep);
+        series(path, s.row_shape(), s.is_int(), chunk_rows).append(buf.data(), keep);
+    };
+    const hsize_t windows = rows_until("/windows/t");
+    for (const auto& name : h5::children(src.get(), "/windows")) copy_rows("/windows/" + name, windows, 4096);
+    for (const auto& name : h5::children(src.get(), "/interface")) {
+        const std::string path = "/interface/" + name;
+        bool mesh = name == "vertices" || name == "cells";
+        h5::Series s(src.get(), path);
+        copy_rows(path, mesh ? s.rows() : windows, mesh ? std::max<hsize_t>(s.rows(), 1) : 64);
+        if (name == "vertices") interface_vertices_ = s.rows();
+    }
+    for (const auto& role : h5::children(src.get(), "/frames")) {
+        const std::string group = "/frames/" + role + "/";
+        const hsize_t frames = rows_until(group + "time");
+        for (const auto& name : h5::children(src.get(), "/frames/" + role))
+            copy_rows(group + name, frames, name == "time" ? 256 : 1);
+        std::vector<double> times = read_all(group + "time");
+        frame_times_[role].assign(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(frames));
+    }
     flush();
 }
 
@@ -84,7 +106,8 @@ h5::Series& Recorder::series(const std::string& path, const std::vector<hsize_t>
     auto it = series_.find(path);
     if (it != series_.end()) return it->second;
     if (h5::exists(h5_.get(), path)) return series_.emplace(path, h5::Series(h5_.get(), path)).first->second;
-    return series_.emplace(path, h5::Series(h5_.get(), path, row_shape, is_int, chunk_rows)).first->second;
+    const bool written_once = chunk_rows == 1;  // frame fields: one frame per chunk
+    return series_.emplace(path, h5::Series(h5_.get(), path, row_shape, is_int, chunk_rows, written_once)).first->second;
 }
 
 void Recorder::set_participant(const std::string& role, const std::string& software, const Value& info) {
@@ -112,8 +135,16 @@ void Recorder::append_window(const std::vector<std::pair<std::string, double>>& 
         for (const auto& [name, v] : columns) window_columns_.push_back(name);
         window_buffer_.resize(window_columns_.size());
     }
-    if (columns.size() != window_columns_.size()) throw std::logic_error("recorder: window columns changed");
-    for (std::size_t i = 0; i < columns.size(); ++i) window_buffer_[i].push_back(columns[i].second);
+    // The columns are those of the first window; a later window's extra names are dropped and its
+    // missing ones recorded as NaN, so every column keeps one row per window.
+    for (std::size_t i = 0; i < window_columns_.size(); ++i) {
+        double value = std::numeric_limits<double>::quiet_NaN();
+        if (i < columns.size() && columns[i].first == window_columns_[i]) value = columns[i].second;
+        else
+            for (const auto& [name, v] : columns)
+                if (name == window_columns_[i]) value = v;
+        window_buffer_[i].push_back(value);
+    }
     if (displacement && force && interface_vertices_) {
         disp_buffer_.insert(disp_buffer_.end(), displacement->values.begin(), displacement->values.end());
         force_buffer_.insert(force_buffer_.end(), force->values.begin(), force->values.end());
@@ -192,9 +223,8 @@ void Recorder::write_xdmf(const std::string& role) {
     x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n<Domain>\n<Grid Name=\"" << role
       << "\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
     const auto& times = frame_times_[role];
-    const hsize_t first = pos.rows() - times.size();  // frames written before a resume are not in frame_times_
     for (std::size_t k = 0; k < times.size(); ++k) {
-        const hsize_t row = first + k;
+        const hsize_t row = k;
         x << "<Grid Name=\"frame" << row << "\" GridType=\"Uniform\">\n<Time Value=\"" << times[k]
           << "\"/>\n<Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n
           << "\"/>\n<Geometry GeometryType=\"XY\">\n";

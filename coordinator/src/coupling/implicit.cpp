@@ -132,6 +132,8 @@ public:
         Vec x = to_vec(d);
         acc_->begin_window();
         WindowOutcome o;
+        std::uint32_t fluid_substeps = 0, structure_substeps = 0, fluid_iters = 0, structure_iters = 0;
+        double fluid_compute = 0, structure_compute = 0, fluid_trip = 0, structure_trip = 0;
         for (int k = 0;; ++k) {
             if (k > 0) {
                 session_.restore("fluid");
@@ -143,6 +145,15 @@ public:
             o.structure = session_.advance("structure", p.t, p.dt, p.structure_substeps, k, Fields{{"force", f}});
             const F64Array& d_new = vertex_field("structure", o.structure.reply.outputs, "displacement", n);
             const F64Array& v_new = vertex_field("structure", o.structure.reply.outputs, "velocity", n);
+            // The record counts the work of every iteration, not only the last one's.
+            fluid_substeps += o.fluid.reply.substeps;
+            structure_substeps += o.structure.reply.substeps;
+            fluid_iters += o.fluid.reply.solver_iterations;
+            structure_iters += o.structure.reply.solver_iterations;
+            fluid_compute += o.fluid.reply.compute_s;
+            structure_compute += o.structure.reply.compute_s;
+            fluid_trip += o.fluid.roundtrip_s;
+            structure_trip += o.structure.roundtrip_s;
             Vec xt = to_vec(d_new);
             // Converged when |r| <= tol_rel |d~| + tol_abs sqrt(n): tol_abs is an RMS length per vertex.
             o.residual = (xt - x).norm();
@@ -163,6 +174,14 @@ public:
             x = acc_->next(x, xt);
         }
         acc_->end_window();
+        o.fluid.reply.substeps = fluid_substeps;
+        o.structure.reply.substeps = structure_substeps;
+        o.fluid.reply.solver_iterations = fluid_iters;
+        o.structure.reply.solver_iterations = structure_iters;
+        o.fluid.reply.compute_s = fluid_compute;
+        o.structure.reply.compute_s = structure_compute;
+        o.fluid.roundtrip_s = fluid_trip;
+        o.structure.roundtrip_s = structure_trip;
         if (!o.converged) {
             std::ostringstream msg;
             msg << "coupling did not converge in window t = " << p.t << " s after " << o.iterations

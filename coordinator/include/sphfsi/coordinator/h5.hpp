@@ -31,16 +31,22 @@ private:
 class Series {
 public:
     Series() = default;
-    Series(hid_t parent, const std::string& path, std::vector<hsize_t> row_shape, bool is_int, hsize_t rows_per_chunk);
+    // `compress`: only for datasets whose chunks are written once (one frame per chunk). A compressed
+    // chunk that is rewritten moves in the file, and a kill between the move and the next flush would
+    // leave the index pointing at reused space; uncompressed chunks are rewritten in place.
+    Series(hid_t parent, const std::string& path, std::vector<hsize_t> row_shape, bool is_int, hsize_t rows_per_chunk,
+           bool compress);
     Series(hid_t parent, const std::string& path);  // opens an existing one
     void append(const void* rows, hsize_t count);   // `count` rows, row-major
-    void truncate(hsize_t rows);                    // drop rows beyond `rows` (resume)
+    void read(void* rows, hsize_t count) const;      // the first `count` rows, row-major
+    std::size_t row_bytes() const;
     hsize_t rows() const { return rows_; }
     const std::vector<hsize_t>& row_shape() const { return row_shape_; }
     bool is_int() const { return is_int_; }
 
 private:
     Handle ds_;
+    std::string path_;  // for messages
     std::vector<hsize_t> row_shape_;
     hsize_t rows_ = 0;
     bool is_int_ = false;
@@ -52,5 +58,11 @@ void write_string(hid_t parent, const std::string& name, const std::string& text
 void set_attribute(hid_t object, const std::string& name, const std::string& value);
 void set_attribute(hid_t object, const std::string& name, double value);
 bool exists(hid_t parent, const std::string& path);
+// Names of the links in `group` ("/frames" -> {"fluid", "structure"}); empty if it does not exist.
+std::vector<std::string> children(hid_t file, const std::string& group);
+// Copies the object at `path` (a group with everything below it, or a dataset) between files.
+void copy_object(hid_t source, hid_t target, const std::string& path);
+// Copies the root group's attributes between files.
+void copy_root_attributes(hid_t source, hid_t target);
 
 }  // namespace sphfsi::coordinator::h5

@@ -43,6 +43,7 @@ public:
 
 private:
     void write_xdmf(const std::string& role);
+    void copy_history(const std::filesystem::path& old_file, double until);
     h5::Series& series(const std::string& path, const std::vector<hsize_t>& row_shape, bool is_int, hsize_t chunk_rows);
 
     std::filesystem::path file_;
