@@ -24,7 +24,10 @@ def test_step_response_matches_analytic():
         assert len(t) == 41, len(t)
         worst = max(abs(yy - step_response(tt, M, C, K, F)) for tt, yy in zip(t, y))
         assert worst < 1e-9 * static, worst
-        assert f["windows/t"].shape[0] == 1000  # dt_max = 2 ms over 2 s
+        # Under a constant load the coordinator asks for one window per output interval (40 over 2 s) and
+        # the participant sub-steps at its dt_max = 2 ms inside them: 1000 steps in all.
+        assert f["windows/t"].shape[0] == 40
+        assert f["windows/structure_substeps"][:].sum() == 1000
     with open(os.path.join(out, "watchpoints.csv")) as fh:
         rows = list(csv.DictReader(fh))
     last = rows[-1]
