@@ -1,0 +1,144 @@
+#pragma once
+// The fused rate pass: one sweep over every particle's neighbours computes, for fluid particles, the
+// acceleration (pressure, viscosity, wall repulsion, gravity, wind), the density rate (continuity +
+// delta-SPH) and the divergence of position (free-surface indicator); for wall particles of the dummy
+// model their density rate; for solid particles the fluid force on them. Gather form: each particle sums
+// over its own neighbours, so threads never write to the same particle (no atomics, no per-thread
+// buffers), at the price of visiting each pair twice.
+//
+// Pressure term (Monaghan 1992): a_i = -sum_j m_j (p_i/rho_i^2 + p_j/rho_j^2) grad_i W_ij, the
+// momentum-conserving symmetric form; every pair term is antisymmetric so the fluid's momentum change due
+// to a solid particle is exactly minus the force we report on it.
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "sphfsi/fluid/cell_grid.hpp"
+#include "sphfsi/fluid/density_diffusion.hpp"
+#include "sphfsi/fluid/kernels.hpp"
+#include "sphfsi/fluid/particles.hpp"
+#include "sphfsi/fluid/viscosity.hpp"
+
+namespace sphfsi::fluid {
+
+template <int Dim>
+struct RateParams {
+    double mass = 0.0;
+    ViscosityParams visc;
+    bool viscous_walls = true;       // no-slip: viscous terms act between fluid and wall/solid particles
+    bool continuity = false;         // integrate density: compute drho/dt
+    bool wall_continuity = false;    // dummy walls integrate their density too
+    DiffusionParams<Dim> diffusion;
+    bool repulsive = false;          // Monaghan (1994) wall force
+    double repulsive_d = 0.0, repulsive_r0 = 0.0;
+    Vec<Dim> gravity{};
+    Vec<Dim> wind{};                 // surface shear stress [Pa]
+    bool wind_on = false;
+    double surface_threshold = 1.5;  // divergence of position below which a particle is on the free surface
+    double surface_share = 0.0;      // surface length (area) one surface particle carries: dp^(Dim-1)
+};
+
+// Monaghan (1994) Lennard-Jones-like wall force, p1 = 12, p2 = 4, acting within r0: acceleration of the
+// fluid particle along x_ij (pointing away from the wall particle).
+template <int Dim>
+inline Vec<Dim> repulsive_acceleration(double d, double r0, const Vec<Dim>& dx, double r2) {
+    const double q2 = r0 * r0 / r2, q4 = q2 * q2;
+    return dx * (d * (q4 * q4 * q4 - q4) / r2);
+}
+
+template <int Dim, class KernelG>
+void compute_rates(ParticleStore<Dim>& P, const CellGrid<Dim>& grid, const KernelG& kg, const ViscosityKernel<Dim>& vk,
+                   const std::vector<double>& pr2, const RateParams<Dim>& prm) {
+    using V = Vec<Dim>;
+    const double R2 = grid.radius2(), m = prm.mass;
+    const bool diffusion = prm.continuity && prm.diffusion.model != DensityDiffusion::None;
+    const ViscosityModel vmodel = prm.visc.model;
+    const double rep_r02 = prm.repulsive_r0 * prm.repulsive_r0;
+    const V* x = P.x.data();
+    const V* v = P.v.data();
+    const V* vv = P.v_visc.data();
+    const double* rho = P.rho.data();
+    const Kind* kind = P.kind.data();
+
+    grid.for_each_cell_parallel([&](std::uint32_t cell, std::uint32_t begin, std::uint32_t end) {
+        typename CellGrid<Dim>::Range ranges[CellGrid<Dim>::max_ranges];
+        const int nr = grid.ranges(cell, ranges);
+        for (std::uint32_t i = begin; i < end; ++i) {
+            const Kind ki = kind[i];
+            const V xi = x[i];
+            const double rho_i = rho[i];
+            if (ki == Kind::Wall) {
+                // Only dummy walls with an integrated density need anything here.
+                double drho = 0.0;
+                if (prm.wall_continuity) {
+                    for (int r = 0; r < nr; ++r)
+                        for (std::uint32_t j = ranges[r].begin; j < ranges[r].end; ++j) {
+                            if (kind[j] != Kind::Fluid) continue;
+                            const V dx = xi - (x[j] + ranges[r].shift);
+                            const double r2 = norm2(dx);
+                            if (r2 >= R2 || r2 == 0.0) continue;
+                            drho += dot(v[i] - v[j], dx) * kg.grad_factor(std::sqrt(r2));
+                        }
+                }
+                P.drho[i] = m * drho;
+                P.a[i] = V{};
+                continue;
+            }
+            const bool is_fluid = ki == Kind::Fluid;
+            // A solid particle's viscous velocity is its ghost velocity, as the fluid sees it.
+            const V vi_visc = is_fluid ? v[i] : vv[i];
+            const V vi = v[i];
+            const double pr2_i = pr2[i], inv_rho_i = 1.0 / rho_i;
+            V acc{}, acc_direct{};
+            double drho = 0.0, drho_diff = 0.0, div_r = 0.0;
+            for (int r = 0; r < nr; ++r) {
+                const V shift = ranges[r].shift;
+                for (std::uint32_t j = ranges[r].begin; j < ranges[r].end; ++j) {
+                    const V dx = xi - (x[j] + shift);
+                    const double r2 = norm2(dx);
+                    if (r2 >= R2 || r2 == 0.0) continue;  // r2 == 0: the particle itself (or a coincident one: no direction)
+                    const Kind kj = kind[j];
+                    const bool fluid_j = kj == Kind::Fluid;
+                    if (!is_fluid && !fluid_j) continue;  // solids only feel the fluid
+                    const double rr = std::sqrt(r2);
+                    const double F = kg.grad_factor(rr);
+                    const double rho_j = rho[j];
+                    double coef = -(pr2_i + pr2[j]);
+                    const bool viscous = fluid_j || prm.viscous_walls;
+                    if (vmodel != ViscosityModel::None && viscous) {
+                        const V vij = vi_visc - (fluid_j ? v[j] : vv[j]);
+                        if (vmodel == ViscosityModel::Artificial) {
+                            coef += artificial_viscosity_coef(prm.visc, dot(vij, dx), r2, rho_i, rho_j);
+                        } else if (vmodel == ViscosityModel::Morris) {
+                            acc += vij * morris_viscosity_factor(prm.visc, F, r2, inv_rho_i, 1.0 / rho_j);
+                        } else {
+                            acc += vij * mueller_viscosity_factor(prm.visc, vk.laplacian(rr), rho_i, rho_j);
+                        }
+                    }
+                    acc += dx * (coef * F);
+                    const double Vj = 1.0 / rho_j;  // volume / m_j
+                    div_r -= F * r2 * Vj;
+                    if (prm.continuity) {
+                        drho += dot(vi - v[j], dx) * F;
+                        if (diffusion && fluid_j && is_fluid) drho_diff += density_diffusion(prm.diffusion, rho_i, rho_j, dx, F, r2);
+                    }
+                    if (prm.repulsive && (is_fluid != fluid_j) && r2 < rep_r02)
+                        acc_direct += repulsive_acceleration(prm.repulsive_d, prm.repulsive_r0, dx, r2);
+                }
+            }
+            V a = acc * m + acc_direct;
+            if (is_fluid) {
+                a += prm.gravity;
+                // Wind: each free-surface particle (divergence of position below the threshold: the outermost
+                // layer, whose kernel support is half empty) carries the stress on its share of the surface,
+                // dp^(Dim-1), so the total force is tau times the surface length.
+                if (prm.wind_on && m * div_r < prm.surface_threshold) a += prm.wind * (prm.surface_share / m);
+            }
+            P.a[i] = a;  // solids: force per unit mass of the particle (the reaction), times m gives newtons
+            P.drho[i] = prm.continuity ? m * (drho + drho_diff) : 0.0;
+            P.div_r[i] = static_cast<float>(m * div_r);
+        }
+    });
+}
+
+}  // namespace sphfsi::fluid

@@ -1,0 +1,148 @@
+#pragma once
+// One SPH simulation: particles, neighbour grid, the chosen models, and time stepping. Knows nothing of
+// the wire protocol except SolverError (failure is reported the way the participant runtime expects).
+// Solid particles are optional; their motion comes from a callback (the interface coupling).
+#include <cstdint>
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "sphfsi/fluid/cell_grid.hpp"
+#include "sphfsi/fluid/equation_of_state.hpp"
+#include "sphfsi/fluid/interaction.hpp"
+#include "sphfsi/fluid/particles.hpp"
+#include "sphfsi/fluid/pcisph.hpp"
+#include "sphfsi/fluid/scene_setup.hpp"
+#include "sphfsi/fluid/settings.hpp"
+#include "sphfsi/fluid/state_io.hpp"
+#include "sphfsi/fluid/time_step.hpp"
+
+namespace sphfsi::fluid {
+
+// Per-window figures for AdvanceReply.stats.
+struct WindowStats {
+    std::uint32_t steps = 0;
+    std::uint64_t iterations = 0;       // PCISPH corrections summed over steps
+    int max_iterations = 0;             // most corrections in one step
+    double dt_min = 0.0, dt_max = 0.0, dt_last = 0.0;
+    double max_density_error = 0.0;     // largest (rho - rho0)/rho0 of a fluid particle (PCISPH: predicted)
+    int retries = 0;                    // PCISPH steps halved for not converging
+};
+
+class Simulation2D {
+public:
+    static constexpr int Dim = 2;
+    using V = Vec<Dim>;
+    // Moves solid particle k (index among solids) to time t: position, velocity, acceleration.
+    using SolidKinematics = std::function<void(std::size_t k, double t, V& x, V& v, V& a)>;
+
+    Simulation2D(const FluidSettings& settings, Scene2D scene, double t0 = 0.0);
+
+    // Appends solid particles (before the first step). Fluid particles closer than 0.75 dp to one of them,
+    // or inside the solid's cells, are turned off by the caller's `inside` test: they are removed here.
+    void add_solids(const std::vector<V>& reference, SolidKinematics kinematics,
+                    const std::function<bool(const V&)>& inside_solid);
+    void set_solid_kinematics(SolidKinematics kinematics) { kinematics_ = std::move(kinematics); }
+
+    // Advances to t_end: substeps == 0 adaptive steps landing exactly on t_end, else that many equal steps.
+    // on_step is called after every step (progress). Throws protocol::SolverError on failure.
+    WindowStats advance(double t_end, std::uint32_t substeps, const std::function<void()>& on_step = {});
+
+    // Largest stable step at the current state (evaluates the rates if needed).
+    double stable_dt();
+
+    // Time-weighted mean over the last advance() of the force on each solid particle [N/m], by solid index.
+    std::vector<V> mean_solid_forces() const;
+
+    double time() const { return st_.t; }
+    double max_speed() const { return st_.u_max; }
+    std::uint64_t escaped_count() const { return st_.escaped; }
+    std::size_t free_surface_count() const;
+    std::uint64_t step_count() const { return st_.step; }
+    const ParticleStore<Dim>& particles() const { return st_.P; }
+    std::size_t fluid_count() const { return n_fluid_; }
+    std::size_t wall_count() const { return n_wall_; }
+    std::size_t solid_count() const { return n_solid_; }
+    const WallGeometry& geometry() const { return geometry_; }
+    double h() const { return h_; }
+    double c0() const { return c0_; }
+    double mass() const { return mass_; }
+    double support() const { return support_; }
+    const FluidSettings& settings() const { return s_; }
+    std::size_t memory_bytes() const;
+    int threads() const { return threads_; }
+    static constexpr std::size_t small_problem = 4000;  // particles below which one thread is used
+
+    // Fluid particles whose centre lies more than 0.1 dp beyond a wall surface or inside an obstacle
+    // (validation: must be 0). Above the side walls of an open tank is not beyond them.
+    struct Crossing { std::size_t count = 0; std::string first; };
+    Crossing wall_crossings() const;
+
+    // In-memory save/restore (implicit coupling) and byte checkpoints (resume bit-identically).
+    void save();
+    void restore();
+    void write_state(ByteWriter& w) const;
+    void read_state(ByteReader& r);
+
+private:
+    struct State {
+        ParticleStore<Dim> P;
+        double t = 0.0;
+        std::uint64_t step = 0;
+        bool rates_fresh = false;  // P.a / P.drho / P.p belong to the current state (or KDK's convention)
+        double a_max = 0.0, u_max = 0.0, rho_max = 0.0, a_max_last = 0.0;
+        std::vector<V> solid_force_sum;  // sum over the window of weight * force, by solid index
+        double solid_weight = 0.0;
+        std::uint64_t escaped = 0;  // fluid particles that left the open tank over a side wall
+    };
+
+    void evaluate();
+    void sort_particles();
+    void move_solids(double t);
+    void reduce_rates();
+    double take_step(double dt, bool adaptive, WindowStats& ws);
+    void step_symplectic(double dt);
+    void drift(double dt);
+    void density_rates();
+    void step_verlet(double dt);
+    void step_predictor_corrector(double dt);
+    double step_pcisph(double dt, bool adaptive, WindowStats& ws);
+    void accumulate_solid_forces(double weight);
+    void wrap_periodic();
+    double check_state();
+    void mark_escaped();  // throws on a broken fluid particle; returns the largest fluid density
+    [[noreturn]] void fail(std::size_t i, const std::string& quantity, double value, const std::string& why) const;
+    V boundary_acceleration(std::uint32_t w) const;
+
+    FluidSettings s_;
+    std::size_t n_fluid_ = 0, n_wall_ = 0, n_solid_ = 0;
+    std::int32_t first_solid_id_ = 0;
+    WallGeometry geometry_;
+    double h_, support_, mass_, c0_;
+    TaitEos tait_;
+    StandardEos standard_;
+    RateParams<Dim> rates_;
+    bool continuity_ = false;  // densities integrated (else summed)
+    PcisphParams<Dim> pcisph_;
+    StepLimits limits_;
+    CellGrid<Dim> grid_;
+    V domain_lo_, domain_hi_;
+    SolidKinematics kinematics_;
+    std::vector<V> solid_acc_;  // kinematic acceleration by solid index (Adami's a_w)
+
+    State st_, saved_;
+    bool has_saved_ = false;
+    int threads_ = 1;
+    double step_dt_ = 0.0;  // dt of the step in progress (failure messages)
+
+    // Scratch (not state).
+    std::vector<std::uint32_t> order_;
+    std::vector<unsigned char> sort_scratch_;
+    std::vector<double> pr2_, rho_tmp_;
+    PcisphScratch<Dim> pci_;
+    std::unique_ptr<std::ofstream> step_log_;
+};
+
+}  // namespace sphfsi::fluid

@@ -1,0 +1,38 @@
+#pragma once
+// The participant adapter: sphfsi::protocol::Solver over Simulation2D. Translates INIT/ADVANCE/... into
+// simulation calls, drives the solid particles from the structure's interface mesh and maps the fluid's
+// forces back onto its vertices.
+#include <memory>
+#include <optional>
+
+#include "sphfsi/fluid/settings.hpp"
+#include "sphfsi/fluid/simulation.hpp"
+#include "sphfsi/fluid/solid_coupling.hpp"
+#include "sphfsi/protocol/solver.hpp"
+
+namespace sphfsi::fluid {
+
+class SphSolver : public protocol::Solver {
+public:
+    std::string kind() const override { return "fluid"; }
+    const schema::TableSchema& schema() const override;
+    protocol::InitReply init(const protocol::InitRequest& request) override;
+    protocol::AdvanceReply advance(const protocol::AdvanceRequest& request, protocol::Progress& progress) override;
+    void save() override;
+    void restore() override;
+    protocol::Fields snapshot() override;
+    std::vector<std::uint8_t> checkpoint() override;
+
+    // For tests and the benchmark.
+    Simulation2D& simulation() { return *sim_; }
+    const InterfaceCoupling* coupling() const { return coupling_ ? &*coupling_ : nullptr; }
+
+private:
+    void require_init() const;
+    FluidSettings settings_;
+    std::unique_ptr<Simulation2D> sim_;
+    std::optional<InterfaceCoupling> coupling_;
+    InterfaceCoupling::State saved_coupling_;
+};
+
+}  // namespace sphfsi::fluid

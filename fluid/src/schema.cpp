@@ -1,0 +1,267 @@
+// The [fluid] scene section. Units are SI; 2D quantities are per metre of depth.
+#include "sphfsi/fluid/schema.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "sphfsi/fluid/kernel_names.hpp"
+
+namespace sphfsi::fluid {
+namespace {
+
+using sphfsi::Value;
+using sphfsi::schema::Errors;
+using sphfsi::schema::TableSchema;
+
+std::string key(const std::string& path, const std::string& name) { return path.empty() ? name : path + "." + name; }
+
+double num(const Value& t, std::string_view k) { return t.at(k).as_double(); }
+
+// Small slack so that a block written as 0.1 m wide in a 0.1 m tank is not rejected by rounding.
+constexpr double slack = 1e-9;
+
+void check_boxes_inside_tank(const Value& fluid, const std::string& path, Errors& errors) {
+    const Value& tank = fluid.at("tank");
+    const double W = num(tank, "width"), H = num(tank, "height"), dp = num(fluid, "dp");
+    for (const char* list : {"water", "obstacle"}) {
+        const Value* blocks = fluid.find(list);
+        if (!blocks) continue;
+        std::size_t i = 0;
+        for (const Value& b : blocks->as_array()) {
+            const std::string where = key(path, std::string(list) + "[" + std::to_string(i++) + "]");
+            const double x0 = num(b, "x0"), y0 = num(b, "y0"), w = num(b, "width"), h = num(b, "height");
+            if (x0 < -slack || y0 < -slack || x0 + w > W + slack || y0 + h > H + slack)
+                errors.add(&b, "key '" + where + "': the box [" + std::to_string(x0) + ", " + std::to_string(x0 + w) +
+                                   "] x [" + std::to_string(y0) + ", " + std::to_string(y0 + h) +
+                                   "] m does not lie inside the tank [0, " + std::to_string(W) + "] x [0, " +
+                                   std::to_string(H) + "] m");
+            if (w < dp * (1 - 1e-9) || h < dp * (1 - 1e-9))
+                errors.add(&b, "key '" + where + "': the box is thinner than one particle spacing dp = " + std::to_string(dp) + " m");
+        }
+    }
+    const Value* water = fluid.find("water");
+    const Value* obstacles = fluid.find("obstacle");
+    if (!water || !obstacles) return;
+    std::size_t i = 0;
+    for (const Value& b : water->as_array()) {
+        std::size_t j = 0;
+        for (const Value& o : obstacles->as_array()) {
+            const bool overlap_x = num(b, "x0") < num(o, "x0") + num(o, "width") - slack && num(o, "x0") < num(b, "x0") + num(b, "width") - slack;
+            const bool overlap_y = num(b, "y0") < num(o, "y0") + num(o, "height") - slack && num(o, "y0") < num(b, "y0") + num(b, "height") - slack;
+            if (overlap_x && overlap_y)
+                errors.add(&b, "key '" + key(path, "water[" + std::to_string(i) + "]") + "': overlaps obstacle[" +
+                                   std::to_string(j) + "]; water and static walls must not share space");
+            ++j;
+        }
+        ++i;
+    }
+}
+
+void check_combinations(const Value& fluid, const std::string& path, Errors& errors) {
+    const Value& pressure = fluid.at("pressure");
+    const Value& density = fluid.at("density");
+    const Value& time = fluid.at("time");
+    const Value& tank = fluid.at("tank");
+    const std::string model = pressure.at("model").as_string();
+    const std::string method = density.at("method").as_string();
+    if (model == "pcisph" && time.at("integrator").as_string() != "symplectic_euler")
+        errors.add(&time, "key '" + key(path, "time.integrator") +
+                              "': PCISPH is its own predictor-corrector around a semi-implicit Euler step; allowed with "
+                              "pressure.model = \"pcisph\": \"symplectic_euler\"");
+    if (model == "pcisph" && method == "continuity")
+        errors.add(&density, "key '" + key(path, "density.method") +
+                                 "': PCISPH predicts densities by summation; allowed with pressure.model = \"pcisph\": "
+                                 "\"summation\", \"shepard\"");
+    if (density.at("diffusion").as_string() != "none" && method != "continuity")
+        errors.add(&density, "key '" + key(path, "density.diffusion") +
+                                 "': density diffusion (delta-SPH) is a term of the continuity equation; it needs "
+                                 "density.method = \"continuity\"");
+    const Value& visc = fluid.at("viscosity");
+    const std::string vm = visc.at("model").as_string();
+    if ((vm == "morris" || vm == "mueller") && !(visc.at("nu").as_double() > 0.0))
+        errors.add(&visc, "key '" + key(path, "viscosity.nu") + "': the \"" + vm + "\" viscosity needs nu > 0");
+    const auto lid = tank.at("lid_velocity").as_doubles();
+    if ((lid[0] != 0.0 || lid[1] != 0.0) && !tank.at("closed_top").as_bool())
+        errors.add(&tank, "key '" + key(path, "tank.lid_velocity") + "': a moving lid needs tank.closed_top = true");
+    if (lid[1] != 0.0)
+        errors.add(&tank, "key '" + key(path, "tank.lid_velocity") + "': the lid slides in its own plane; its y component must be 0");
+    const std::string periodic = fluid.at("periodic").as_string();
+    const double support = num(fluid, "dp") * num(fluid, "h_over_dp") * kernel_support_factor(fluid.at("kernel").as_string());
+    if ((periodic == "x" || periodic == "xy") && num(tank, "width") < 3.0 * support)
+        errors.add(&tank, "key '" + key(path, "tank.width") + "': a periodic axis must be at least 3 kernel support radii long (" +
+                              std::to_string(3.0 * support) + " m)");
+    if ((periodic == "y" || periodic == "xy") && num(tank, "height") < 3.0 * support)
+        errors.add(&tank, "key '" + key(path, "tank.height") + "': a periodic axis must be at least 3 kernel support radii long (" +
+                              std::to_string(3.0 * support) + " m)");
+    if ((periodic == "y" || periodic == "xy") && tank.at("closed_top").as_bool())
+        errors.add(&tank, "key '" + key(path, "tank.closed_top") + "': a tank periodic in y has no bottom or top wall");
+    if (model == "wcsph" && pressure.at("c0").as_double() == 0.0 && pressure.at("u_max").as_double() == 0.0) {
+        const auto g = fluid.at("gravity").as_doubles();
+        if (std::hypot(g[0], g[1]) == 0.0 || !fluid.find("water"))
+            errors.add(&pressure, "key '" + key(path, "pressure.c0") +
+                                      "': c0 cannot be estimated without gravity and water; set pressure.c0 or pressure.u_max");
+    }
+    const Value& failure = fluid.at("failure");
+    if (num(failure, "min_density_ratio") >= num(failure, "max_density_ratio"))
+        errors.add(&failure, "key '" + key(path, "failure") + "': min_density_ratio must be below max_density_ratio");
+    const double dt_max = num(time, "dt_max");
+    if (dt_max > 0.0 && dt_max < num(time, "dt_min"))
+        errors.add(&time, "key '" + key(path, "time.dt_max") + "': below time.dt_min");
+}
+
+TableSchema build() {
+    TableSchema s("The SPH fluid participant (sphfsi-fluid). SI units; 2D, quantities per metre of depth.");
+    s.number("dp", "initial particle spacing; sets particle size and mass rho0 * dp^2").unit("m").greater_than(0).required();
+    s.number("h_over_dp", "smoothing length h in units of dp; the support radius is 2h (3h for \"gaussian\"). 1.5: Wendland gradients on the initial lattice are consistent to 0.3 % and 3 wall layers cover the support")
+        .at_least(1.0).at_most(4.0).fallback(1.5);
+    s.choice("kernel", {"mueller", "poly6", "spiky", "cubic_spline", "wendland", "gaussian"},
+             "smoothing kernel: \"mueller\" = the thesis's set (poly6 densities, spiky pressure gradients), "
+             "\"wendland\" = Wendland quintic C2, \"cubic_spline\" = cubic B-spline, \"gaussian\" = truncated at 3h")
+        .fallback("wendland");
+    s.number("rho0", "rest density").unit("kg/m^3").greater_than(0).fallback(1000.0);
+    s.vector("gravity", 2, "body force per unit mass (also any imposed mean pressure gradient)").unit("m/s^2")
+        .fallback(Value(Value::Array{Value(0.0), Value(-9.81)}));
+    s.choice("periodic", {"none", "x", "y", "xy"}, "periodic axes; the tank has no walls across a periodic axis")
+        .fallback("none");
+    s.integer("threads", "OpenMP threads; 0 = all cores the process may use (OMP_NUM_THREADS). Scenes under 4000 "
+                         "particles run on one thread: thread synchronisation would cost more than it saves")
+        .at_least(0).fallback(0);
+    s.string("step_log", "file to append one line per time step to (step, t, dt, iterations, density error); "
+                         "empty = no per-step log")
+        .fallback("");
+
+    TableSchema& tank = s.table("tank", "rectangular tank [0, width] x [0, height] lined with wall particles", true);
+    tank.number("width", "inner width").unit("m").greater_than(0).required();
+    tank.number("height", "inner height (height of the side walls)").unit("m").greater_than(0).required();
+    tank.integer("wall_layers", "layers of wall particles (the kernel support must fit: >= support radius / dp)")
+        .at_least(1).at_most(8).fallback(3);
+    tank.boolean("closed_top", "put a wall (the lid) along the top too").fallback(false);
+    tank.vector("lid_velocity", 2, "velocity of the lid, sliding in its plane (Couette flow)").unit("m/s")
+        .fallback(Value(Value::Array{Value(0.0), Value(0.0)}));
+
+    TableSchema& water = s.table_array("water", "rectangular blocks of water, filled on a dp lattice");
+    water.number("x0", "left edge").unit("m").required();
+    water.number("y0", "bottom edge").unit("m").required();
+    water.number("width", "width").unit("m").greater_than(0).required();
+    water.number("height", "height").unit("m").greater_than(0).required();
+    water.integer("tag", "dye tag recorded for every particle of the block").fallback(0);
+    water.choice("split", {"none", "vertical", "horizontal"},
+                 "dye the block's two halves differently: tag for the left/bottom half, tag + 1 for the other")
+        .fallback("none");
+
+    TableSchema& obstacle = s.table_array("obstacle", "static solid boxes inside the tank, filled with wall particles");
+    obstacle.number("x0", "left edge").unit("m").required();
+    obstacle.number("y0", "bottom edge").unit("m").required();
+    obstacle.number("width", "width").unit("m").greater_than(0).required();
+    obstacle.number("height", "height").unit("m").greater_than(0).required();
+
+    TableSchema& pressure = s.table("pressure", "pressure model");
+    pressure.choice("model", {"standard", "wcsph", "pcisph"},
+                    "\"standard\": p = k (rho - rho0) (the thesis's standard SPH); \"wcsph\": Tait equation; "
+                    "\"pcisph\": predictive-corrective incompressible SPH (Solenthaler & Pajarola 2009)")
+        .fallback("wcsph");
+    pressure.number("k", "stiffness of the standard SPH equation of state").unit("m^2/s^2").greater_than(0).fallback(1000.0);
+    pressure.number("c0", "WCSPH speed of sound; 0 = 10 u_max").unit("m/s").at_least(0).fallback(0.0);
+    pressure.number("u_max", "expected largest flow speed for c0 = 10 u_max; 0 = sqrt(2 |g| H) with H the highest water top")
+        .unit("m/s").at_least(0).fallback(0.0);
+    pressure.number("gamma", "Tait exponent").at_least(1).fallback(7.0);
+    pressure.number("background", "background pressure added to the equation of state").unit("Pa").fallback(0.0);
+    pressure.boolean("clamp_negative",
+                     "set negative fluid pressures to zero (stops free-surface particles from pulling together, "
+                     "which summation densities would otherwise cause)")
+        .fallback(true);
+    pressure.number("eta", "PCISPH: iterate until the largest density error is below eta * rho0")
+        .greater_than(0).less_than(1).fallback(0.01);
+    pressure.integer("min_iterations", "PCISPH: fewest corrections per step").at_least(1).fallback(3);
+    pressure.integer("max_iterations", "PCISPH: most corrections before the step is halved and retried")
+        .at_least(3).fallback(50);
+
+    TableSchema& density = s.table("density", "how densities are obtained");
+    density.choice("method", {"summation", "shepard", "continuity"},
+                   "\"summation\": rho = sum m W; \"shepard\": summation divided by the Shepard sum sum V_j W with the "
+                   "volumes V = m / rho of the plain sums (CSPM); \"continuity\": integrate drho/dt = sum m (v_i - v_j) . grad W")
+        .fallback("continuity");
+    density.choice("diffusion", {"none", "molteni", "fourtakas"},
+                   "delta-SPH density diffusion in the continuity equation: Molteni & Colagrossi (2009), or "
+                   "Fourtakas et al. (2019) which diffuses only the non-hydrostatic part")
+        .fallback("none");
+    density.number("delta", "density diffusion coefficient").at_least(0).fallback(0.1);
+
+    TableSchema& viscosity = s.table("viscosity", "viscous term");
+    viscosity.choice("model", {"none", "artificial", "morris", "mueller"},
+                     "\"artificial\": Monaghan (1992) with alpha; \"morris\": laminar, Morris et al. (1997); "
+                     "\"mueller\": Laplacian of Mueller's viscosity kernel (the thesis)")
+        .fallback("artificial");
+    viscosity.number("alpha", "artificial viscosity coefficient").at_least(0).fallback(0.01);
+    viscosity.number("nu", "kinematic viscosity for \"morris\" and \"mueller\"").unit("m^2/s").at_least(0).fallback(1e-6);
+
+    TableSchema& boundary = s.table("boundary", "wall and solid particles");
+    boundary.choice("model", {"dummy", "adami"},
+                    "\"dummy\": wall particles get density and pressure like fluid particles (the thesis's ghost "
+                    "particles); \"adami\": pressure extrapolated from the fluid (Adami, Hu & Adams 2012)")
+        .fallback("adami");
+    boundary.choice("slip", {"no_slip", "free_slip"},
+                    "\"no_slip\": viscous terms see the wall's extrapolated ghost velocity (Adami); \"free_slip\": "
+                    "no viscous interaction with walls")
+        .fallback("no_slip");
+    boundary.boolean("repulsive", "add Monaghan's (1994) repulsive wall force within dp of a wall particle").fallback(false);
+    boundary.number("repulsive_d", "strength D of the repulsive force; 0 = 5 |g| H with H the highest water top")
+        .unit("m^2/s^2").at_least(0).fallback(0.0);
+
+    TableSchema& surface = s.table("free_surface", "free-surface detection and wind stress");
+    surface.number("threshold", "a particle is on the free surface when the divergence of position (2 inside the "
+                                "fluid, in 2D) is below this")
+        .greater_than(0).less_than(2).fallback(1.5);
+    surface.vector("wind_shear", 2, "shear stress applied to the free surface (wind): each free-surface particle "
+                                    "carries it on dp of surface, a body force tau dp / m").unit("Pa")
+        .fallback(Value(Value::Array{Value(0.0), Value(0.0)}));
+
+    TableSchema& time = s.table("time", "time stepping");
+    time.choice("integrator", {"symplectic_euler", "velocity_verlet", "predictor_corrector"},
+                "\"symplectic_euler\": semi-implicit Euler (the thesis); \"velocity_verlet\": kick-drift-kick; "
+                "\"predictor_corrector\": Monaghan's midpoint predictor-corrector (two evaluations per step)")
+        .fallback("symplectic_euler");
+    time.number("cfl", "lambda_v in dt <= lambda_v h / (c + |u|)").greater_than(0).at_most(1).fallback(0.4);
+    time.number("force_factor", "lambda_F in dt <= lambda_F sqrt(h / |a|)").greater_than(0).at_most(1).fallback(0.25);
+    time.number("viscous_factor", "lambda_nu in dt <= lambda_nu h^2 / nu").greater_than(0).at_most(1).fallback(0.125);
+    time.number("dt_min", "step floor: a stable step below it stops the run as diverged").unit("s").greater_than(0).fallback(1e-8);
+    time.number("dt_max", "largest step; 0 = no cap").unit("s").at_least(0).fallback(0.0);
+
+    TableSchema& failure = s.table("failure", "bounds beyond which the run stops as diverged");
+    failure.number("min_density_ratio", "smallest rho / rho0 of a fluid particle").at_least(0).fallback(0.01);
+    failure.number("max_density_ratio", "largest rho / rho0 of a fluid particle").greater_than(1).fallback(1.5);
+
+    // Sub-tables the scene leaves out stand for their defaults (the schema only fills keys that are present).
+    s.check([](const Value& fluid, const std::string& path, Errors& errors) {
+        const Value full = with_defaults(fluid);
+        check_boxes_inside_tank(full, path, errors);
+        check_combinations(full, path, errors);
+    });
+    return s;
+}
+
+}  // namespace
+
+sphfsi::Value with_defaults(const sphfsi::Value& fluid) {
+    Value out = fluid;
+    for (const auto& f : scene_schema().fields()) {
+        if (f.kind() != sphfsi::schema::Field::Kind::Table || out.find(f.name())) continue;
+        Errors ignored;  // an empty table of defaults cannot be invalid
+        out.as_table_mut()[f.name()] = f.table()->validate(Value(Value::Table{}), f.name(), ignored);
+    }
+    return out;
+}
+
+sphfsi::Value validate_scene(const sphfsi::Value& fluid, const std::string& source) {
+    Errors errors;
+    Value checked = scene_schema().validate(fluid, "fluid", errors);
+    sphfsi::schema::throw_if_any(errors, source);
+    return with_defaults(checked);
+}
+
+const sphfsi::schema::TableSchema& scene_schema() {
+    static const TableSchema schema = build();
+    return schema;
+}
+
+}  // namespace sphfsi::fluid

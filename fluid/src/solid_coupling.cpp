@@ -1,0 +1,115 @@
+#include "sphfsi/fluid/solid_coupling.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace sphfsi::fluid {
+namespace {
+
+Vec2 row(const protocol::F64Array& a, std::size_t i) { return Vec2{{a(i, 0), a(i, 1)}}; }
+
+void check_shape(const protocol::F64Array& a, std::size_t n, const char* name) {
+    if (a.shape.size() != 2 || a.rows() != n || a.cols() != 2)
+        throw std::invalid_argument(std::string("interface input '") + name + "' must have shape (" + std::to_string(n) +
+                                    ", 2), got " + std::to_string(a.rows()) + " x " + std::to_string(a.cols()));
+}
+
+}  // namespace
+
+InterfaceCoupling::InterfaceCoupling(const protocol::InterfaceMesh& mesh, double dp) {
+    const auto& V = mesh.vertices;
+    const auto& C = mesh.cells;
+    if (V.shape.size() != 2 || V.cols() != 2) throw std::invalid_argument("interface mesh: vertices must be (n, 2)");
+    if (C.shape.size() != 2 || C.cols() != 4) throw std::invalid_argument("interface mesh: cells must be (m, 4)");
+    const std::size_t nv = V.rows();
+    for (std::size_t i = 0; i < nv; ++i) reference_.push_back(row(V, i));
+    for (std::size_t c = 0; c < C.rows(); ++c) {
+        std::array<Vec2, 4> X;
+        std::array<std::int32_t, 4> ids;
+        for (int k = 0; k < 4; ++k) {
+            ids[k] = C(c, static_cast<std::uint64_t>(k));
+            if (ids[k] < 0 || static_cast<std::size_t>(ids[k]) >= nv)
+                throw std::invalid_argument("interface mesh: cell " + std::to_string(c) + " names vertex " +
+                                            std::to_string(ids[k]) + " of " + std::to_string(nv));
+            X[k] = reference_[static_cast<std::size_t>(ids[k])];
+        }
+        // Particles per parametric direction: the longer of the two opposite edges over dp, at least one.
+        const double len_xi = std::max(norm(X[1] - X[0]), norm(X[2] - X[3]));
+        const double len_eta = std::max(norm(X[3] - X[0]), norm(X[2] - X[1]));
+        const int n_xi = std::max(1, static_cast<int>(std::lround(len_xi / dp)));
+        const int n_eta = std::max(1, static_cast<int>(std::lround(len_eta / dp)));
+        for (int b = 0; b < n_eta; ++b)
+            for (int a = 0; a < n_xi; ++a) {
+                const double xi = (a + 0.5) / n_xi, eta = (b + 0.5) / n_eta;
+                SolidParticleWeights w;
+                w.vertex = ids;
+                w.weight = {(1 - xi) * (1 - eta), xi * (1 - eta), xi * eta, (1 - xi) * eta};
+                Vec2 x{};
+                for (int k = 0; k < 4; ++k) x += X[k] * w.weight[k];
+                weights_.push_back(w);
+                particles_ref_.push_back(x);
+            }
+    }
+    state_.u0.assign(nv, Vec2{});
+    state_.v0.assign(nv, Vec2{});
+    state_.u1 = state_.u0;
+    state_.v1 = state_.v0;
+}
+
+void InterfaceCoupling::begin_window(double t0, double dt, const protocol::F64Array* displacement,
+                                     const protocol::F64Array* velocity) {
+    const std::size_t n = reference_.size();
+    state_.t0 = t0;
+    state_.dt = dt;
+    state_.u1 = state_.u0;
+    state_.v1 = state_.v0;
+    if (displacement) {
+        check_shape(*displacement, n, "displacement");
+        for (std::size_t i = 0; i < n; ++i) state_.u1[i] = row(*displacement, i);
+    }
+    if (velocity) {
+        check_shape(*velocity, n, "velocity");
+        for (std::size_t i = 0; i < n; ++i) state_.v1[i] = row(*velocity, i);
+    }
+}
+
+void InterfaceCoupling::end_window() {
+    state_.u0 = state_.u1;
+    state_.v0 = state_.v1;
+    state_.t0 += state_.dt;
+    state_.dt = 0.0;
+}
+
+void InterfaceCoupling::kinematics(std::size_t k, double t, Vec2& x, Vec2& v, Vec2& a) const {
+    const auto& w = weights_[k];
+    // Fraction of the window elapsed; outside a window (dt = 0) the structure sits at its start values.
+    const double s = state_.dt > 0.0 ? std::clamp((t - state_.t0) / state_.dt, 0.0, 1.0) : 0.0;
+    const double inv_dt = state_.dt > 0.0 ? 1.0 / state_.dt : 0.0;
+    x = particles_ref_[k];
+    v = Vec2{};
+    a = Vec2{};
+    for (int q = 0; q < 4; ++q) {
+        const std::size_t i = static_cast<std::size_t>(w.vertex[q]);
+        const Vec2 u = state_.u0[i] + (state_.u1[i] - state_.u0[i]) * s;
+        const Vec2 vel = state_.v0[i] + (state_.v1[i] - state_.v0[i]) * s;
+        x += u * w.weight[q];
+        v += vel * w.weight[q];
+        a += (state_.v1[i] - state_.v0[i]) * (inv_dt * w.weight[q]);
+    }
+}
+
+protocol::F64Array InterfaceCoupling::map_forces(const std::vector<SolidParticleWeights>& weights,
+                                                 const std::vector<Vec2>& particle_forces, std::size_t n_vertices) {
+    auto out = protocol::F64Array::zeros(n_vertices, 2);
+    for (std::size_t p = 0; p < weights.size(); ++p)
+        for (int q = 0; q < 4; ++q) {
+            const auto v = static_cast<std::uint64_t>(weights[p].vertex[q]);
+            out(v, 0) += weights[p].weight[q] * particle_forces[p][0];
+            out(v, 1) += weights[p].weight[q] * particle_forces[p][1];
+        }
+    return out;
+}
+
+}  // namespace sphfsi::fluid

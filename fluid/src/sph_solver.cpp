@@ -1,0 +1,225 @@
+#include "sphfsi/fluid/sph_solver.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <omp.h>
+
+#include "sphfsi/fluid/schema.hpp"
+
+namespace sphfsi::fluid {
+namespace {
+
+using protocol::F64Array;
+using protocol::I32Array;
+using protocol::SolverError;
+
+// Point inside a quadrilateral cell (counter-clockwise; convex cells, as a beam mesh has).
+bool inside_quad(const std::array<Vec2, 4>& q, const Vec2& p) {
+    for (int k = 0; k < 4; ++k) {
+        const Vec2 a = q[static_cast<std::size_t>(k)], b = q[static_cast<std::size_t>((k + 1) % 4)];
+        if ((b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]) < 0.0) return false;
+    }
+    return true;
+}
+
+const F64Array* find_f64(const protocol::Fields& fields, const char* name) {
+    auto it = fields.find(name);
+    if (it == fields.end()) return nullptr;
+    const auto* a = std::get_if<F64Array>(&it->second);
+    if (!a) throw SolverError("bad_config", std::string("input '") + name + "' must be f8");
+    return a;
+}
+
+void write_coupling_state(ByteWriter& w, const InterfaceCoupling::State& s) {
+    w.put_vector(s.u0); w.put_vector(s.v0); w.put_vector(s.u1); w.put_vector(s.v1);
+    w.put(s.t0); w.put(s.dt);
+}
+
+InterfaceCoupling::State read_coupling_state(ByteReader& r) {
+    InterfaceCoupling::State s;
+    r.get_vector(s.u0); r.get_vector(s.v0); r.get_vector(s.u1); r.get_vector(s.v1);
+    s.t0 = r.get<double>();
+    s.dt = r.get<double>();
+    return s;
+}
+
+}  // namespace
+
+const schema::TableSchema& SphSolver::schema() const { return scene_schema(); }
+
+void SphSolver::require_init() const {
+    if (!sim_) throw SolverError("internal", "the fluid solver was used before INIT");
+}
+
+protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
+    try {
+        settings_ = read_settings(request.config);
+    } catch (const ConfigError& e) {
+        throw SolverError("bad_config", e.what());
+    }
+    sim_ = std::make_unique<Simulation2D>(settings_, build_scene(settings_), request.t0);
+    coupling_.reset();
+    if (request.interface) {
+        try {
+            coupling_.emplace(*request.interface, settings_.dp);
+        } catch (const std::invalid_argument& e) {
+            throw SolverError("bad_config", e.what());
+        }
+        std::vector<std::array<Vec2, 4>> quads;
+        const auto& mesh = *request.interface;
+        for (std::size_t c = 0; c < mesh.cells.rows(); ++c) {
+            std::array<Vec2, 4> q;
+            for (int k = 0; k < 4; ++k) {
+                const auto v = static_cast<std::uint64_t>(mesh.cells(c, static_cast<std::uint64_t>(k)));
+                q[static_cast<std::size_t>(k)] = Vec2{{mesh.vertices(v, 0), mesh.vertices(v, 1)}};
+            }
+            quads.push_back(q);
+        }
+        InterfaceCoupling* coupling = &*coupling_;
+        coupling->begin_window(request.t0, 0.0, nullptr, nullptr);
+        coupling->end_window();
+        sim_->add_solids(
+            coupling->reference_positions(),
+            [coupling](std::size_t k, double t, Vec2& x, Vec2& v, Vec2& a) { coupling->kinematics(k, t, x, v, a); },
+            [quads](const Vec2& p) {
+                for (const auto& q : quads)
+                    if (inside_quad(q, p)) return true;
+                return false;
+            });
+    }
+    if (!request.state.empty()) {
+        try {
+            ByteReader r(request.state);
+            sim_->read_state(r);
+            const bool has_coupling = r.get<std::uint8_t>() != 0;
+            if (has_coupling != coupling_.has_value())
+                throw SolverError("bad_config", "checkpoint: it was written " + std::string(has_coupling ? "with" : "without") +
+                                                    " an interface mesh, but this INIT " +
+                                                    (coupling_ ? "has one" : "has none"));
+            if (coupling_) coupling_->set_state(read_coupling_state(r));
+            if (!r.at_end()) throw SolverError("bad_config", "checkpoint: trailing bytes");
+        } catch (const std::runtime_error& e) {
+            if (dynamic_cast<const SolverError*>(&e)) throw;
+            throw SolverError("bad_config", e.what());
+        }
+    }
+    save();
+    protocol::InitReply reply;
+    reply.dt_wanted = sim_->stable_dt();
+    Value::Table info;
+    info["particles"] = Value(static_cast<std::int64_t>(sim_->particles().size()));
+    info["fluid_particles"] = Value(static_cast<std::int64_t>(sim_->fluid_count()));
+    info["wall_particles"] = Value(static_cast<std::int64_t>(sim_->wall_count()));
+    info["solid_particles"] = Value(static_cast<std::int64_t>(sim_->solid_count()));
+    info["dp"] = Value(settings_.dp);
+    info["h"] = Value(sim_->h());
+    info["support_radius"] = Value(sim_->support());
+    info["particle_mass"] = Value(sim_->mass());
+    info["c0"] = Value(sim_->c0());
+    info["pressure_model"] = Value(to_string(settings_.pressure));
+    info["density_method"] = Value(to_string(settings_.density));
+    info["viscosity_model"] = Value(to_string(settings_.viscosity));
+    info["wall_model"] = Value(to_string(settings_.wall));
+    info["integrator"] = Value(to_string(settings_.integrator));
+    info["threads"] = Value(static_cast<std::int64_t>(sim_->threads()));
+    info["memory_bytes_per_particle"] =
+        Value(static_cast<double>(sim_->memory_bytes()) / static_cast<double>(sim_->particles().size()));
+    reply.info = Value(std::move(info));
+    return reply;
+}
+
+protocol::AdvanceReply SphSolver::advance(const protocol::AdvanceRequest& request, protocol::Progress& progress) {
+    require_init();
+    const double t = sim_->time();
+    if (std::abs(request.t - t) > 1e-9 * std::max(1.0, std::abs(t)))
+        throw SolverError("internal", "ADVANCE starts at t = " + std::to_string(request.t) + " s but the fluid is at t = " +
+                                          std::to_string(t) + " s");
+    if (!(request.dt > 0.0)) throw SolverError("internal", "ADVANCE with a window length that is not > 0");
+    if (coupling_) {
+        try {
+            coupling_->begin_window(t, request.dt, find_f64(request.inputs, "displacement"),
+                                    find_f64(request.inputs, "velocity"));
+        } catch (const std::invalid_argument& e) {
+            throw SolverError("bad_config", e.what());
+        }
+    }
+    const WindowStats ws = sim_->advance(t + request.dt, request.substeps, [&] { progress.tick(); });
+    protocol::AdvanceReply reply;
+    reply.t = sim_->time();
+    reply.substeps = ws.steps;
+    reply.solver_iterations = static_cast<std::uint32_t>(ws.iterations);
+    if (coupling_)
+        reply.outputs["force"] = InterfaceCoupling::map_forces(coupling_->weights(), sim_->mean_solid_forces(),
+                                                               coupling_->vertex_count());
+    reply.dt_wanted = sim_->stable_dt();
+    if (coupling_) coupling_->end_window();
+    Value::Table stats;
+    stats["steps"] = Value(static_cast<std::int64_t>(ws.steps));
+    stats["dt_min"] = Value(ws.dt_min);
+    stats["dt_max"] = Value(ws.dt_max);
+    stats["dt_last"] = Value(ws.dt_last);
+    stats["max_density_error"] = Value(ws.max_density_error);
+    stats["pcisph_iterations"] = Value(static_cast<std::int64_t>(ws.iterations));
+    stats["pcisph_max_iterations"] = Value(static_cast<std::int64_t>(ws.max_iterations));
+    stats["pcisph_retries"] = Value(static_cast<std::int64_t>(ws.retries));
+    stats["max_speed"] = Value(sim_->particles().size() ? sim_->max_speed() : 0.0);
+    stats["escaped_particles"] = Value(static_cast<std::int64_t>(sim_->escaped_count()));
+    stats["free_surface_particles"] = Value(static_cast<std::int64_t>(sim_->free_surface_count()));
+    reply.stats = Value(std::move(stats));
+    return reply;
+}
+
+void SphSolver::save() {
+    require_init();
+    sim_->save();
+    if (coupling_) saved_coupling_ = coupling_->state();
+}
+
+void SphSolver::restore() {
+    require_init();
+    sim_->restore();
+    if (coupling_) coupling_->set_state(saved_coupling_);
+}
+
+protocol::Fields SphSolver::snapshot() {
+    require_init();
+    const auto& P = sim_->particles();
+    const std::size_t n = P.size();
+    auto pos = F64Array::zeros(n, 2), vel = F64Array::zeros(n, 2);
+    auto rho = F64Array::zeros(n, 1), p = F64Array::zeros(n, 1);
+    auto tag = I32Array::zeros(n, 1), kind = I32Array::zeros(n, 1), surface = I32Array::zeros(n, 1);
+    const float threshold = static_cast<float>(settings_.surface_threshold);
+    for (std::size_t i = 0; i < n; ++i) {
+        const auto k = static_cast<std::uint64_t>(P.id[i]);  // stable order: by original index
+        pos(k, 0) = P.x[i][0];
+        pos(k, 1) = P.x[i][1];
+        vel(k, 0) = P.v[i][0];
+        vel(k, 1) = P.v[i][1];
+        rho(k, 0) = P.rho[i];
+        p(k, 0) = P.p[i];
+        tag(k, 0) = P.tag[i];
+        kind(k, 0) = static_cast<std::int32_t>(P.kind[i]);  // 0 fluid, 1 wall, 2 solid, 3 escaped
+        surface(k, 0) = P.kind[i] == Kind::Fluid && P.div_r[i] < threshold ? 1 : 0;
+    }
+    protocol::Fields f;
+    f["position"] = std::move(pos);
+    f["velocity"] = std::move(vel);
+    f["density"] = std::move(rho);
+    f["pressure"] = std::move(p);
+    f["tag"] = std::move(tag);
+    f["kind"] = std::move(kind);
+    f["free_surface"] = std::move(surface);
+    return f;
+}
+
+std::vector<std::uint8_t> SphSolver::checkpoint() {
+    require_init();
+    ByteWriter w;
+    sim_->write_state(w);
+    w.put<std::uint8_t>(coupling_ ? 1 : 0);
+    if (coupling_) write_coupling_state(w, coupling_->state());
+    return w.take();
+}
+
+}  // namespace sphfsi::fluid

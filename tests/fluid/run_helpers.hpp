@@ -1,0 +1,34 @@
+#pragma once
+// Driving the fluid solver through its participant interface, as the coordinator would.
+#include <cmath>
+#include <functional>
+#include <memory>
+
+#include "sphfsi/fluid/sph_solver.hpp"
+
+namespace fluid_test {
+
+inline std::unique_ptr<sphfsi::fluid::SphSolver> start(const sphfsi::Value& config, double t0 = 0.0) {
+    auto solver = std::make_unique<sphfsi::fluid::SphSolver>();
+    sphfsi::protocol::InitRequest req;
+    req.config = config;
+    req.t0 = t0;
+    solver->init(req);
+    return solver;
+}
+
+// Advances in windows of `window` seconds (adaptive sub-steps) up to t_end, calling `each` after every
+// window with the reply.
+inline void run(sphfsi::fluid::SphSolver& solver, double t_end, double window,
+                const std::function<void(const sphfsi::protocol::AdvanceReply&)>& each = {}) {
+    sphfsi::protocol::Progress progress;
+    while (solver.simulation().time() < t_end - 1e-12) {
+        sphfsi::protocol::AdvanceRequest req;
+        req.t = solver.simulation().time();
+        req.dt = std::min(window, t_end - req.t);
+        const auto reply = solver.advance(req, progress);
+        if (each) each(reply);
+    }
+}
+
+}  // namespace fluid_test

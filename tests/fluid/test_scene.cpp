@@ -1,0 +1,115 @@
+// The [fluid] scene section: validation messages name the key and what is allowed, cross-key rules
+// hold, defaults fill in; and scenes with the optional geometry (obstacles, periodic axes, a lid) build
+// and run without a particle crossing a wall.
+#include <doctest/doctest.h>
+
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include "run_helpers.hpp"
+#include "scenes.hpp"
+#include "sphfsi/fluid/schema.hpp"
+
+using namespace fluid_test;
+using sphfsi::fluid::Kind;
+
+namespace {
+
+std::string problems(const Value& fluid) {
+    sphfsi::schema::Errors errors;
+    sphfsi::fluid::scene_schema().validate(fluid, "fluid", errors);
+    std::string all;
+    for (const auto& e : errors.items) all += e + "\n";
+    return all;
+}
+
+}  // namespace
+
+TEST_SUITE("scene") {
+    TEST_CASE("a minimal scene is valid and defaults fill in") {
+        CHECK(problems(dam_break(0.005)) == "");
+        const Value full = sphfsi::fluid::validate_scene(dam_break(0.005));
+        CHECK(full.at("pressure").at("model").as_string() == "wcsph");
+        CHECK(full.at("time").at("cfl").as_double() == 0.4);
+        CHECK(full.at("time").at("force_factor").as_double() == 0.25);
+        CHECK(full.at("h_over_dp").as_double() == 1.5);
+        // Every key is documented.
+        const std::string doc = sphfsi::fluid::scene_schema().document("fluid");
+        for (const char* k : {"fluid.dp", "fluid.tank.width", "fluid.water[].x0", "fluid.pressure.eta",
+                              "fluid.density.diffusion", "fluid.viscosity.alpha", "fluid.boundary.model",
+                              "fluid.free_surface.wind_shear", "fluid.time.integrator", "fluid.failure.max_density_ratio"})
+            CHECK_MESSAGE(doc.find(std::string("`") + k + "`") != std::string::npos, k);
+    }
+
+    TEST_CASE("water outside the tank is refused, naming the block") {
+        Value f = dam_break(0.005);
+        f.as_table_mut()["water"] = Value(Value::Array{block(0.45, 0.0, 0.1, 0.2)});
+        const std::string p = problems(f);
+        CHECK(p.find("fluid.water[0]") != std::string::npos);
+        CHECK(p.find("does not lie inside the tank") != std::string::npos);
+    }
+
+    TEST_CASE("inconsistent choices are refused with the reason") {
+        CHECK(problems(with(dam_break(0.005), {{"pressure.model", "pcisph"}})).find("PCISPH predicts densities by summation") != std::string::npos);
+        CHECK(problems(with(dam_break(0.005), {{"pressure.model", "pcisph"}, {"density.method", "summation"}, {"time.integrator", "velocity_verlet"}})).find("symplectic_euler") != std::string::npos);
+        CHECK(problems(with(dam_break(0.005), {{"density.method", "summation"}, {"density.diffusion", "molteni"}})).find("continuity") != std::string::npos);
+        CHECK(problems(with(dam_break(0.005), {{"tank.lid_velocity", vec2(1.0, 0.0)}})).find("closed_top") != std::string::npos);
+        CHECK(problems(with(dam_break(0.005), {{"periodic", "x"}, {"tank.width", 0.02}})).find("3 kernel support radii") != std::string::npos);
+        CHECK(problems(with(dam_break(0.005), {{"kernel", "quartic"}})).find("allowed: one of") != std::string::npos);
+        CHECK(problems(with(dam_break(0.005), {{"dp", -1.0}})).find("fluid.dp") != std::string::npos);
+        CHECK(problems(with(dam_break(0.005), {{"nonsense", 1.0}})).find("unknown key 'fluid.nonsense'") != std::string::npos);
+        // The participant reports the same problems as bad_config.
+        sphfsi::fluid::SphSolver s;
+        sphfsi::protocol::InitRequest req;
+        req.config = with(dam_break(0.005), {{"kernel", "quartic"}});
+        try {
+            s.init(req);
+            FAIL("accepted a bad scene");
+        } catch (const sphfsi::protocol::SolverError& e) {
+            CHECK(e.code() == "bad_config");
+        }
+    }
+
+    TEST_CASE("a dam break against an obstacle: no particle enters a wall; the step log has a line per step") {
+        const std::string log = "fluid_test_step_log.csv";
+        std::remove(log.c_str());
+        Value f = wcsph(dam_break(0.1 / 20));
+        Value::Table box;
+        box["x0"] = 0.3;
+        box["y0"] = 0.0;
+        box["width"] = 0.04;
+        box["height"] = 0.05;
+        f.as_table_mut()["obstacle"] = Value(Value::Array{Value(std::move(box))});
+        f = with(f, {{"step_log", log}});
+        auto s = start(f);
+        std::size_t crossings = 0, steps = 0;
+        run(*s, 0.4, 0.02, [&](const auto& r) {
+            const auto c = s->simulation().wall_crossings();
+            if (c.count) MESSAGE("t = ", s->simulation().time(), ": ", c.first);
+            crossings += c.count;
+            steps += r.substeps;
+        });
+        CHECK(crossings == 0);
+        std::ifstream in(log);
+        std::size_t lines = 0;
+        for (std::string line; std::getline(in, line);) ++lines;
+        CHECK(lines == steps + 1);  // header + one line per step
+        std::remove(log.c_str());
+    }
+
+    TEST_CASE("a closed box periodic in x keeps water at rest") {
+        Value f;
+        f.make_table();
+        f = with(f, {{"dp", 0.005}, {"periodic", "x"}, {"tank.width", 0.1}, {"tank.height", 0.1}, {"tank.closed_top", true}});
+        f.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, 0.1, 0.06)});
+        auto s = start(wcsph(f));
+        run(*s, 0.3, 0.05);
+        CHECK(s->simulation().wall_crossings().count == 0);
+        // Every particle stays inside the period.
+        for (std::size_t i = 0; i < s->simulation().particles().size(); ++i) {
+            const double x = s->simulation().particles().x[i][0];
+            CHECK((x >= 0.0 && x < 0.1));
+        }
+    }
+}
