@@ -73,6 +73,9 @@ StructureConfig StructureConfig::from_value(const Value& section) {
         ms.end = point(v.at("end"));
         ms.n_elements = static_cast<int>(v.at("n_elements").as_int());
         ms.wetted = v.at("wetted").as_bool();
+        const auto padding = v.at("interface_padding").as_doubles();
+        ms.pad_left = padding[0];
+        ms.pad_right = padding[1];
         c.members.push_back(ms);
     });
     each(s, "supports", [&](const Value& v) {

@@ -18,9 +18,10 @@ InterfaceMap::InterfaceMap(const Model& model, const StructureConfig& config) : 
         const Vec2 axis = (model.nodes[nodes.back()] - model.nodes[nodes.front()]).normalized();
         const Vec2 normal(-axis.y(), axis.x());
         const auto first = static_cast<std::int32_t>(vertices_.size());
+        const double right = half + config.members[m].pad_right, left = half + config.members[m].pad_left;
         for (int node : nodes) {
-            vertices_.push_back({node, -half * normal});  // bottom face: index first + 2k
-            vertices_.push_back({node, half * normal});   // top face: first + 2k + 1
+            vertices_.push_back({node, -right * normal});  // bottom (right) face: index first + 2k
+            vertices_.push_back({node, left * normal});    // top (left) face: first + 2k + 1
         }
         for (std::int32_t k = 0; k + 1 < static_cast<std::int32_t>(nodes.size()); ++k) {
             const std::int32_t b0 = first + 2 * k, b1 = b0 + 2;

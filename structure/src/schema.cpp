@@ -211,6 +211,12 @@ TableSchema build() {
     mem.vector("end", 2, "second end point").unit("m").required();
     mem.integer("n_elements", "number of equal beam elements").at_least(1).at_most(100000).fallback(10);
     mem.boolean("wetted", "publish this member's faces (at +-t/2) as fluid interface").fallback(true);
+    mem.vector("interface_padding", 2,
+               "[left, right]: extend the published cross-section beyond the faces on the member's left side "
+               "(counter-clockwise from start to end) and right side. The fluid fills the cross-section with solid "
+               "particles at its own spacing, and a plate thinner than the kernel support lets water through: pad "
+               "a side that stays dry (the mesh moves rigidly with the section, so mapping stays exact)")
+        .unit("m").at_least(0).fallback(Value::Array{0.0, 0.0});
     mem.check([](const Value& m, const std::string& path, Errors& errors) {
         Point a = point_of(m.at("start")), b = point_of(m.at("end"));
         if (!(std::hypot(b.x - a.x, b.y - a.y) > 0.0))

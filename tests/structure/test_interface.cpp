@@ -50,6 +50,19 @@ TEST_CASE("mesh: two face vertices per node of wetted members, one CCW quad per 
     }
 }
 
+TEST_CASE("padding widens the published section on the requested side only") {
+    Value s = beam(4);
+    set(s, "members[0].interface_padding", vec(0.01, 0.03));  // left (+y for a member along +x), right (-y)
+    const auto cfg = config(s);
+    const Model m = build_model(cfg);
+    const InterfaceMap map(m, cfg);
+    const auto& v = map.mesh().vertices;
+    for (std::uint64_t i = 0; i < v.rows(); i += 2) {
+        CHECK(v(i, 1) == doctest::Approx(-(t / 2 + 0.03)));     // bottom face, padded by 0.03
+        CHECK(v(i + 1, 1) == doctest::Approx(t / 2 + 0.01));    // top face, padded by 0.01
+    }
+}
+
 TEST_CASE("consistency: after any rotation the faces stay at t/2 from the node, normal to the rotated axis") {
     const auto cfg = two_members();
     const Model m = build_model(cfg);

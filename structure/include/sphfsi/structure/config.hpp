@@ -37,6 +37,7 @@ struct MemberSpec {
     Point2 start{}, end{};
     int n_elements = 10;
     bool wetted = true;
+    double pad_left = 0.0, pad_right = 0.0;  // published cross-section beyond the faces [m]
 };
 struct SupportSpec {
     Point2 at{};
