@@ -1,0 +1,98 @@
+#!/usr/bin/env -S /usr/bin/python3
+"""sphfsi's benchmark command (the `sphfsi bench` of the performance issue): fixed, deterministic
+workloads, each run as its own process, repeated, medians printed.
+
+usage: /usr/bin/python3 tools/bench.py [--bin build/bin] [--repeats 5] [--quick] [--only fluid|pcisph|coupled]
+
+Workloads:
+  fluid    the dam break of docs/benchmarks.md (Wendland, h = 1.41 dp, WCSPH with Fourtakas diffusion,
+           artificial viscosity, symplectic Euler) at ~10k, ~40k and ~160k particles, 1 and 2 threads
+  pcisph   the same with PCISPH (fewer steps: each costs 15-30 WCSPH steps)
+  coupled  the elastic gate (scenarios/elastic_gate.toml, dp = 2 mm, 0.1 s) through the coordinator
+For each: particles, steps, wall seconds, particle-steps per second, peak resident memory per particle
+(the process's peak RSS from wait4, divided by its particle count), and for the coupled run the share of
+wall time spent messaging and waiting, and the coordinator's own CPU use.
+"""
+import os
+import re
+import statistics
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def run_measured(argv):
+    """Runs argv to completion; returns its stdout and the rusage of that process alone (peak RSS)."""
+    p = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # Read the output fully, then reap with wait4 to get this child's own peak RSS.
+    out = p.stdout.read()
+    err = p.stderr.read()
+    _, status, usage = os.wait4(p.pid, 0)
+    p.returncode = os.waitstatus_to_exitcode(status)
+    if p.returncode:
+        sys.exit(f"{' '.join(argv)} failed ({p.returncode}):\n{err}")
+    return out, usage
+
+
+def fluid_rows(bin_dir, model, sizes, threads, steps, repeats):
+    rows = []
+    for size in sizes:
+        for t in threads:
+            rates, rss, last = [], [], None
+            for _ in range(repeats):
+                out, usage = run_measured([os.path.join(bin_dir, "sphfsi-fluid-bench"), "--sizes", size, "--threads", str(t),
+                                           "--models", model, "--steps", str(steps)])
+                line = [l for l in out.splitlines() if l.startswith(model)][0].split()
+                # model threads fluid particles steps iters wall_s rate bytes/part
+                last = line
+                rates.append(float(line[7]))
+                rss.append(usage.ru_maxrss * 1024 / int(line[3]))
+            rows.append((model, t, int(last[3]), int(last[4]), float(last[6]), statistics.median(rates), min(rates),
+                         max(rates), statistics.median(rss)))
+    return rows
+
+
+def coupled_row(bin_dir, repeats):
+    shares, cpu, walls, windows = [], [], [], 0
+    for _ in range(repeats):
+        out_dir = tempfile.mkdtemp(prefix="sphfsi-bench-gate-")
+        run_measured([os.path.join(bin_dir, "sphfsi"), "run", os.path.join(ROOT, "scenarios", "elastic_gate.toml"), "--out",
+                      out_dir, "--quiet", "--set", "run.end_time=0.1"])
+        import h5py
+        with h5py.File(os.path.join(out_dir, "record.h5"), "r") as f:
+            wall = f.attrs["wall_s"]
+            shares.append(100 * f.attrs["messaging_and_waiting_s"] / wall)
+            cpu.append(100 * f.attrs["coordinator_cpu_s"] / wall)
+            walls.append(wall)
+            windows = f["windows/t"].shape[0]
+    return statistics.median(walls), windows, statistics.median(shares), max(shares), statistics.median(cpu), max(cpu)
+
+
+def main():
+    args = sys.argv[1:]
+    opt = lambda name, default: args[args.index(name) + 1] if name in args else default
+    bin_dir = os.path.abspath(opt("--bin", os.path.join(ROOT, "build", "bin")))
+    repeats = int(opt("--repeats", "5"))
+    only = opt("--only", None)
+    quick = "--quick" in args
+    sizes = ["10k"] if quick else ["10k", "40k", "160k"]
+    print(f"sphfsi benchmarks, {repeats} repeats each, medians (min - max); binaries in {bin_dir}")
+    header = "| workload | threads | particles | steps | wall [s] | particle-steps/s | min - max | peak RSS / particle [B] |"
+    if only in (None, "fluid", "pcisph"):
+        print(header)
+        print("|---|---|---|---|---|---|---|---|")
+        for model, steps in (("wcsph", 200), ("pcisph", 30)):
+            if only not in (None, "fluid" if model == "wcsph" else "pcisph"):
+                continue
+            for m, t, n, s, wall, rate, lo, hi, rss in fluid_rows(bin_dir, model, sizes, [1, 2], steps, repeats):
+                print(f"| dam break {m} | {t} | {n} | {s} | {wall:.3f} | {rate / 1e6:.2f} M | {lo / 1e6:.2f} - {hi / 1e6:.2f} M | {rss:.0f} |")
+    if only in (None, "coupled"):
+        wall, windows, share, share_max, cpu, cpu_max = coupled_row(bin_dir, repeats)
+        print(f"\nelastic gate, dp = 2 mm, 0.1 s, {windows} windows: wall {wall:.2f} s; messaging and waiting "
+              f"{share:.2f} % of wall (max {share_max:.2f} %); coordinator CPU {cpu:.2f} % of one core (max {cpu_max:.2f} %)")
+
+
+if __name__ == "__main__":
+    main()
