@@ -193,5 +193,28 @@ def test_hydrostatic_plate_settles_to_plate_theory():
 
 
 
+def test_xdmf_sidecar_points_at_the_frames():
+    """record.xdmf is well-formed XDMF 3 whose every HDF5 reference names a dataset of record.h5 with the
+    dimensions it claims, one grid per fluid frame (what ParaView needs to open the frames)."""
+    import xml.etree.ElementTree as ET
+    out = run_coarse("elastic_gate")
+    root = ET.parse(os.path.join(out, "record.xdmf")).getroot()
+    grids = root.findall("./Domain/Grid/Grid")
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert len(grids) == f["frames/fluid/time"].shape[0]
+        for grid in grids:
+            for item in grid.iter("DataItem"):
+                if item.get("Format") != "HDF":
+                    continue
+                file_name, path = item.text.strip().split(":", 1)
+                assert file_name == "record.h5"
+                dims = tuple(int(x) for x in item.get("Dimensions").split())
+                shape = f[path].shape
+                assert shape == dims or shape + (1,) == dims, (path, shape, dims)
+        times = [float(g.find("Time").get("Value")) for g in grids]
+        assert times == sorted(times)
+
+
+
 if __name__ == "__main__":
     harness.main(globals())
