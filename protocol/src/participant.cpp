@@ -215,14 +215,12 @@ private:
                 default:
                     return reply_error(m.seq, "bad_state", std::string(to_string(m.type)) + " is not a request a participant answers");
             }
-        } catch (const SolverError& e) {
-            log(std::string(e.code()) + ": " + e.what());
+        } catch (const CodedError& e) {  // solver failures and protocol violations carry their own code
+            log(e.code() + ": " + e.what());
             reply_error(m.seq, e.code(), e.what());
         } catch (const ConfigError& e) {
             log(std::string("bad_config: ") + e.what());
             reply_error(m.seq, "bad_config", e.what());
-        } catch (const ProtocolError& e) {
-            reply_error(m.seq, e.code(), e.what());
         } catch (const std::exception& e) {
             log(std::string("internal error: ") + e.what());
             reply_error(m.seq, "internal", e.what());

@@ -13,6 +13,24 @@ SCENE = os.path.join(harness.ROOT, "scenarios", "beam_only.toml")
 SETTINGS = ["--set", "run.end_time=3.0", "--set", "run.checkpoint_interval=0.5", "--set", "run.output_interval=0.05"]
 
 
+def killed_after_first_checkpoint(scene, settings, name):
+    """Starts the scene, SIGKILLs the coordinator as soon as a checkpoint exists, resumes it to the end;
+    returns the output folder."""
+    cut = harness.out_dir(name)
+    run = harness.Running("run", scene, "--out", cut, "--quiet", *settings)
+    checkpoint = os.path.join(cut, "checkpoint.bin")
+    deadline = time.time() + 120
+    while not os.path.exists(checkpoint) and time.time() < deadline and run.proc.poll() is None:
+        time.sleep(0.01)
+    assert os.path.exists(checkpoint), "no checkpoint was written"
+    run.proc.send_signal(signal.SIGKILL)
+    run.proc.wait(timeout=10)
+    code, text = harness.sphfsi("run", "--resume", cut, "--quiet", timeout=240)
+    assert code == 0, text
+    assert "resumed at t = " in text, text
+    return cut
+
+
 def final_state(out):
     with harness.record(os.path.join(out, "record.h5")) as f:
         assert f.attrs["status"] == "completed", f.attrs["status"]
@@ -24,18 +42,7 @@ def test_resumed_run_matches_uninterrupted_run():
     full = harness.out_dir("resume-full")
     harness.sphfsi("run", SCENE, "--out", full, "--quiet", *SETTINGS, check=0, timeout=120)
 
-    cut = harness.out_dir("resume-cut")
-    run = harness.Running("run", SCENE, "--out", cut, "--quiet", *SETTINGS)
-    checkpoint = os.path.join(cut, "checkpoint.bin")
-    deadline = time.time() + 60
-    while not os.path.exists(checkpoint) and time.time() < deadline and run.proc.poll() is None:
-        time.sleep(0.01)
-    assert os.path.exists(checkpoint), "no checkpoint was written"
-    run.proc.send_signal(signal.SIGKILL)
-    run.proc.wait(timeout=10)
-    code, text = harness.sphfsi("run", "--resume", cut, "--quiet", timeout=120)
-    assert code == 0, text
-    assert "resumed at t = " in text, text
+    cut = killed_after_first_checkpoint(SCENE, SETTINGS, "resume-cut")
 
     t_a, d_a, v_a, w_a = final_state(full)
     t_b, d_b, v_b, w_b = final_state(cut)
@@ -57,17 +64,7 @@ def test_resumed_coupled_run_matches_uninterrupted_run():
                 "--set", "run.output_interval=0.005"]
     full = harness.out_dir("resume-gate-full")
     harness.sphfsi("run", scene, "--out", full, "--quiet", *settings, check=0, timeout=240)
-    cut = harness.out_dir("resume-gate-cut")
-    run = harness.Running("run", scene, "--out", cut, "--quiet", *settings)
-    checkpoint = os.path.join(cut, "checkpoint.bin")
-    deadline = time.time() + 120
-    while not os.path.exists(checkpoint) and time.time() < deadline and run.proc.poll() is None:
-        time.sleep(0.01)
-    assert os.path.exists(checkpoint), "no checkpoint was written"
-    run.proc.send_signal(signal.SIGKILL)
-    run.proc.wait(timeout=10)
-    code, text = harness.sphfsi("run", "--resume", cut, "--quiet", timeout=240)
-    assert code == 0, text
+    cut = killed_after_first_checkpoint(scene, settings, "resume-gate-cut")
     with harness.record(os.path.join(full, "record.h5")) as a, harness.record(os.path.join(cut, "record.h5")) as b:
         assert b.attrs["status"] == "completed"
         assert np.array_equal(a["windows/t"][:], b["windows/t"][:]), "the resumed run took different windows"

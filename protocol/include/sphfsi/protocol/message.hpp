@@ -80,13 +80,10 @@ struct Message {
     const T& as() const;  // throws ProtocolError if the body is not a T
 };
 
-class ProtocolError : public std::runtime_error {
+// A message that breaks the protocol ("bad_message", "too_large", "unknown_type", "version_mismatch").
+class ProtocolError : public CodedError {
 public:
-    ProtocolError(std::string code, const std::string& message) : std::runtime_error(message), code_(std::move(code)) {}
-    const std::string& code() const { return code_; }
-
-private:
-    std::string code_;
+    using CodedError::CodedError;
 };
 
 template <class T>

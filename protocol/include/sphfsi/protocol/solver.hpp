@@ -14,15 +14,21 @@
 
 namespace sphfsi::protocol {
 
-// A solver failure that ends the run: blow-up, non-convergence, bad configuration. `code` is one of the
-// error codes of docs/protocol.md ("diverged", "not_converged", "bad_config", "internal").
-class SolverError : public std::runtime_error {
+// An error that travels as an ERROR reply: `code` is one of the codes of docs/protocol.md.
+class CodedError : public std::runtime_error {
 public:
-    SolverError(std::string code, const std::string& message) : std::runtime_error(message), code_(std::move(code)) {}
+    CodedError(std::string code, const std::string& message) : std::runtime_error(message), code_(std::move(code)) {}
     const std::string& code() const { return code_; }
 
 private:
     std::string code_;
+};
+
+// A solver failure that ends the run: blow-up, non-convergence, bad configuration ("diverged",
+// "not_converged", "bad_config", "internal").
+class SolverError : public CodedError {
+public:
+    using CodedError::CodedError;
 };
 
 struct InitRequest {
