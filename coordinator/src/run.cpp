@@ -112,11 +112,8 @@ int Runner::execute() {
     std::optional<Checkpoint> resume;
     if (opt_.resume) {
         resume = read_checkpoint(opt_.out_dir / "checkpoint.bin");
-        auto tmp = opt_.out_dir / "resumed_scene.toml";
-        { std::ofstream(tmp) << resume->scene_text; }
-        scene_ = load_scene(tmp, resume->overrides);
-        scene_.file = resume->scene_file;  // relative program paths resolve against the original scene
-        std::filesystem::remove(tmp);
+        // The scene as the run saw it, not as the file may read now; paths stay relative to the original.
+        scene_ = parse_scene(resume->scene_text, resume->scene_file, resume->overrides);
     } else {
         scene_ = load_scene(opt_.scene, opt_.overrides);
         scene_.file = std::filesystem::absolute(opt_.scene);

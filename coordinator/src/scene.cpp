@@ -77,9 +77,13 @@ std::optional<std::vector<std::string>> Scene::custom_program(std::string_view r
 }
 
 Scene load_scene(const std::filesystem::path& file, const std::vector<std::string>& overrides) {
+    return parse_scene(read_file(file), file, overrides);
+}
+
+Scene parse_scene(std::string text, const std::filesystem::path& file, const std::vector<std::string>& overrides) {
     Scene scene;
     scene.file = file;
-    scene.text = read_file(file);
+    scene.text = std::move(text);
     scene.overrides = overrides;
     Value raw;
     try {
