@@ -204,7 +204,10 @@ TableSchema build() {
                     "\"no_slip\": viscous terms see the wall's extrapolated ghost velocity (Adami); \"free_slip\": "
                     "no viscous interaction with walls")
         .fallback("no_slip");
-    boundary.boolean("repulsive", "add Monaghan's (1994) repulsive wall force within dp of a wall particle").fallback(false);
+    boundary.boolean("repulsive", "add Monaghan's (1994) repulsive wall force within dp of a wall particle: the "
+                                  "non-penetration guard for spray, which carries no pressure for the Adami walls to push "
+                                  "back with")
+        .fallback(true);
     boundary.number("repulsive_d", "strength D of the repulsive force; 0 = 5 |g| H with H the highest water top")
         .unit("m^2/s^2").at_least(0).fallback(0.0);
 
