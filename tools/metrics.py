@@ -321,20 +321,24 @@ def participant_info(run_dir, params, context):
     return _errors(value, _exact(params, context))
 
 
-@metric("window_stat", dict(column=REQUIRED, reduce="max", absolute=False, t_start=None),
+@metric("window_stat", dict(column=REQUIRED, reduce="max", absolute=False, t_start=None, t_end=None),
         {"value": ("the reduced /windows column", "as the column")}, ("value",))
 def window_stat(run_dir, params, context):
     """A reduction (sum, max, min, mean, last) of one /windows column, e.g. the largest coupling
     residual or the mean number of coupling iterations; `absolute` takes |x| first; windows ending before
-    t_start are left out. value = reduce(x over windows)."""
+    t_start or after t_end are left out. value = reduce(x over windows)."""
     with open_record(run_dir) as f:
         w = f.get("windows")
         if w is None or params["column"] not in w:
             raise MetricError(f"no /windows/{params['column']} in the record")
         x = w[params["column"]][:]
         t = w["t"][:]
+    keep = np.ones(x.shape, dtype=bool)
     if params.get("t_start") is not None:
-        x = x[t >= float(params["t_start"])]
+        keep &= t >= float(params["t_start"])
+    if params.get("t_end") is not None:
+        keep &= t <= float(params["t_end"]) * (1 + 1e-12)
+    x = x[keep]
     if params["absolute"]:
         x = np.abs(x)
     if x.size == 0:
@@ -345,7 +349,7 @@ def window_stat(run_dir, params, context):
     return {"value": float(ops[params["reduce"]](x))}
 
 
-DENSITY_WINDOW_COLUMNS = ("fluid_max_density_error", "max_density_error", "fluid_density_error")
+DENSITY_WINDOW_COLUMNS = ("fluid.max_density_error", "fluid_max_density_error", "max_density_error", "fluid_density_error")
 
 
 @metric("max_density_error", dict(rho0=None, t_start=None, source="auto", mode="compression"),

@@ -206,8 +206,8 @@ TableSchema build() {
         .fallback("no_slip");
     boundary.boolean("repulsive", "add Monaghan's (1994) repulsive wall force within dp of a wall particle: the "
                                   "non-penetration guard for spray, which carries no pressure for the Adami walls to push "
-                                  "back with")
-        .fallback(true);
+                                  "back with (turn it on for violent impacts, e.g. scenarios/elastic_obstacle.toml)")
+        .fallback(false);
     boundary.number("repulsive_d", "strength D of the repulsive force; 0 = 5 |g| H with H the highest water top")
         .unit("m^2/s^2").at_least(0).fallback(0.0);
 

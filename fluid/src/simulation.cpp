@@ -89,7 +89,7 @@ Simulation2D::Simulation2D(const FluidSettings& settings, Scene2D scene, double 
     rates_.diffusion.eta2 = eta2;
     if (s_.diffusion == DensityDiffusion::Fourtakas)
         rates_.diffusion.hydro = V{{s_.rho0 * s_.gravity[0] / (c0_ * c0_), s_.rho0 * s_.gravity[1] / (c0_ * c0_)}};
-    // Monaghan's (1994) wall force, on by default. Pressure alone does not keep spray out of a wall: the
+    // Monaghan's (1994) wall force (boundary.repulsive). Pressure alone does not keep spray out of a wall: the
     // continuity equation reads a jet breaking up as expansion, so a spray particle flies at a fraction of rho0
     // (0.48 rho0 in elastic_obstacle.toml at dp = 4 mm) and, with negative pressures clamped, at p = 0; the Adami
     // wall pressure is extrapolated from the fluid, so it is zero too (plus a hydrostatic head of a few pascals),

@@ -101,7 +101,7 @@ TEST_SUITE("scene") {
 
     TEST_CASE("spray from a dam break against a thin obstacle stays out of the walls") {
         // The fluid side of scenarios/elastic_obstacle.toml (Walhorn et al. 2005) with the cantilever as a static
-        // block, at the scene's default dp = 4 mm and default fluid settings. The surge hits the block at
+        // block, at the scene's default dp = 4 mm and its fluid settings (repulsive wall force on). The surge hits the block at
         // t = 0.13 s and throws spray up and back. The continuity equation reads the break-up as expansion, so
         // spray flies at a fraction of rho0 and, negative pressures being clamped, at p = 0; the Adami wall
         // pressure, extrapolated from the fluid, is zero too, and nothing pushed such a particle back until it
@@ -120,6 +120,7 @@ TEST_SUITE("scene") {
         box["width"] = 0.012;
         box["height"] = 0.08;
         f.as_table_mut()["obstacle"] = Value(Value::Array{Value(std::move(box))});
+        f.as_table_mut()["boundary"] = Value(Value::Table{{"repulsive", Value(true)}});  // as the scene sets it
         auto s = start(f);
         const auto& sim = s->simulation();
         std::size_t crossings = 0;

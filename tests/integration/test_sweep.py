@@ -657,5 +657,35 @@ def test_docs_describe_every_column_and_metric():
         assert f"`{key}`" in doc, f"docs/sweeps.md does not describe the key {key}"
 
 
+FLUID_GUARD = os.path.join(harness.ROOT, "sweeps", "guard_fluid.toml")
+COUPLED_GUARD = os.path.join(harness.ROOT, "sweeps", "guard_coupled.toml")
+
+
+def test_fluid_guard_passes():
+    rc, text = sweep(FLUID_GUARD, "--out", os.path.join(harness.out_dir("sweep-guard-fluid"), "out"), "--check", "--no-charts")
+    assert rc == 0 and "check: 6 guarded run(s) as recorded" in text, text
+
+
+def test_coupled_guard_passes():
+    rc, text = sweep(COUPLED_GUARD, "--out", os.path.join(harness.out_dir("sweep-guard-coupled"), "out"), "--check",
+                     "--no-charts")
+    assert rc == 0 and "check: 3 guarded run(s) as recorded" in text, text
+
+
+def test_added_mass_explicit_diverges_iqn_multirate_holds():
+    """The added-mass map's end point (docs/validation.md): a light, flexible plate under water. Serial
+    explicit coupling diverges (detected and reported); IQN-ILS over multi-rate windows stays stable."""
+    scene = os.path.join(harness.ROOT, "tests", "integration", "scenes", "swap_builtin.toml")
+    d = harness.out_dir("added-mass")
+    base = ["--set", "structure.material.E=7.0e8", "--set", "structure.material.rho=30.0",
+            "--set", "structure.members[0].interface_padding=[0.0, 0.03]"]
+    code, msg = harness.sphfsi("run", scene, "--out", os.path.join(d, "explicit"), "--quiet", *base, timeout=240)
+    assert code == 1 and "diverged" in msg, msg
+    code, msg = harness.sphfsi("run", scene, "--out", os.path.join(d, "iqn"), "--quiet", *base,
+                               "--set", 'coupling.scheme="implicit-iqn-ils"', "--set", 'coupling.window="multi-rate"',
+                               "--set", "coupling.max_fluid_steps=10", timeout=240)
+    assert code == 0, msg
+
+
 if __name__ == "__main__":
     harness.main(globals())

@@ -1,13 +1,11 @@
 """What a finished run left behind, as result columns: how it ended, and what it cost.
 
 Costs (docs/sweeps.md, "Columns"):
-  particle_steps = fluid particles x sum over windows of fluid_substeps x iterations (walls and solid
-                   particles are not counted; a predictor-corrector step counts once though it evaluates
-                   forces twice). Each implicit coupling iteration re-runs the window's sub-steps from the
-                   saved state, and the record keeps the last iteration's count, hence the product; for
-                   explicit schemes and a participant alone iterations = 1 and this is fluid particles x
-                   sum of fluid sub-steps.
-  element_steps  = structure elements x sum over windows of structure_substeps x iterations;
+  particle_steps = fluid particles x sum over windows of fluid_substeps (walls and solid particles are not
+                   counted; a predictor-corrector step counts once though it evaluates forces twice). The
+                   record's fluid_substeps already sums the sub-steps of every implicit coupling iteration
+                   (each re-runs the window from the saved state), so this is the work actually done.
+  element_steps  = structure elements x sum over windows of structure_substeps;
   coupling_iterations = sum of /windows/iterations.
 Either is left empty when the run has no such participant or recorded no window.
 """
@@ -100,10 +98,6 @@ def read_record(run_dir):
                         "structure_solver_iterations"):
                 if col in w:
                     sums[col] = float(w[col][:].sum())
-            it = w["iterations"][:] if "iterations" in w else 1.0
-            for col in ("fluid_substeps", "structure_substeps"):
-                if col in w:
-                    sums[col + "_computed"] = float((w[col][:] * it).sum())
         else:
             out["windows"] = 0
         out["coupling_iterations"] = _int_or_none(sums.get("iterations"))
@@ -117,14 +111,14 @@ def read_record(run_dir):
             out["fluid_solver_iterations"] = _int_or_none(sums.get("fluid_solver_iterations"))
             if "threads" in fluid.attrs:
                 out["fluid_threads"] = int(fluid.attrs["threads"])
-            if out["fluid_particles"] is not None and sums.get("fluid_substeps_computed") is not None:
-                out["particle_steps"] = int(round(out["fluid_particles"] * sums["fluid_substeps_computed"]))
+            if out["fluid_particles"] is not None and sums.get("fluid_substeps") is not None:
+                out["particle_steps"] = int(round(out["fluid_particles"] * sums["fluid_substeps"]))
         if structure is not None:
             out["structure_elements"] = _first_attr(structure.attrs, ELEMENT_KEYS) or _frame_rows(f, "structure", "elements")
             out["structure_substeps"] = _int_or_none(sums.get("structure_substeps"))
             out["structure_solver_iterations"] = _int_or_none(sums.get("structure_solver_iterations"))
-            if out["structure_elements"] is not None and sums.get("structure_substeps_computed") is not None:
-                out["element_steps"] = int(round(out["structure_elements"] * sums["structure_substeps_computed"]))
+            if out["structure_elements"] is not None and sums.get("structure_substeps") is not None:
+                out["element_steps"] = int(round(out["structure_elements"] * sums["structure_substeps"]))
     return out
 
 

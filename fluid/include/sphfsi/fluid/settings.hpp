@@ -58,7 +58,7 @@ struct FluidSettings {
 
     WallModel wall = WallModel::Adami;
     bool no_slip = true;
-    bool repulsive = true;
+    bool repulsive = false;
     double repulsive_d = 0.0;
 
     double surface_threshold = 1.5;
