@@ -9,7 +9,18 @@
 // timed from the release signal; Lethe, DualSPHysics and VOF results show the same lead). We do not shift
 // or scale time. What we measured (dp = a/40): WCSPH leads by 13.5 to 17.7 % for 0.84 <= T <= 1.83, by
 // 8 to 11 % for 1.98 <= T <= 2.51 (PCISPH within 1.5 % of WCSPH); halving dp moves the front further ahead
-// by 1 to 2 %, so the lead is not a resolution artefact. The test therefore asserts, and prints every point:
+// by 1 to 2 %, so the lead is not a resolution artefact.
+// What else we tried (WCSPH, dp = a/40, lead at T = 0.84 / 1.19 / 1.83 / 2.32; defaults 13.7 / 17.8 / 12.8 /
+// 7.2 %): free-slip walls 14.8 / 20.2 / 17.2 / 12.2 % (floor friction already slows the front; no-slip is the
+// default); artificial viscosity alpha = 0: 15.0 / 20.5 / 17.6 / 12.4 %, alpha = 0.1: 9.8 / 13.7 / 9.3 / 3.2 %;
+// no density diffusion 13.1 / 17.1 / 11.9 / 6.7 %; h = 2 dp 11.9 / 15.6 / 11.0 / 6.2 %; cubic spline 12.6 /
+// 17.1 / 12.2 / 7.1 %. Only the artificial viscosity moves the front by more than 2 %, and choosing alpha to
+// match the experiment would be a fit (it is numerical dissipation; water at this scale has Re ~ 1e5), as
+// would h = 2 dp (the variants ran with the repulsive wall force on, which moves the front by 0.3 % at
+// most). Published particle and VOF fronts for this column are also drawn ahead of Martin & Moyce over
+// 1 <= T <= 2 (we could not pin a percentage from a source we could check), so 10 % there is not a
+// physically justified target; the 20 % bound below stays as it was.
+// The test therefore asserts, and prints every point:
 //   * T = 0.41 (before the gate matters) and 2.3 <= T <= 2.5: |Z - Z_exp| <= 10 % of Z_exp,
 //   * 0.8 <= T < 2.3 (gate lag): the simulation is ahead of the experiment, by at most 20 %.
 // Also: no particle centre crosses a wall surface, and the dye tags survive.

@@ -125,6 +125,9 @@ private:
     StandardEos standard_;
     RateParams<Dim> rates_;
     bool continuity_ = false;  // densities integrated (else summed)
+    // Integrated densities are kept at or above min(rho(p = 0), kinematic density); see the constructor.
+    bool kinematic_floor_ = false;
+    double kinematic_norm_ = 1.0, kinematic_cap_ = 0.0;
     PcisphParams<Dim> pcisph_;
     StepLimits limits_;
     CellGrid<Dim> grid_;
