@@ -41,6 +41,11 @@ void Launcher::start(const std::string& role, const std::vector<std::string>& ar
         if (::getppid() != parent) ::_exit(127);
         // Own process group: Ctrl-C reaches the coordinator only, which then shuts the run down in order.
         ::setpgid(0, 0);
+        // Inherit no descriptor beyond stdio: an inherited record file keeps its HDF5 lock alive in a
+        // participant for the moment it outlives a killed coordinator, and `--resume` right after found
+        // the record locked. (close_range is a plain system call, safe between fork and exec.)
+        if (::close_range(3, ~0U, 0) != 0)
+            for (long fd = 3, n = ::sysconf(_SC_OPEN_MAX); fd < n; ++fd) ::close(static_cast<int>(fd));
         ::putenv(env_token.data());
         ::execvp(args[0], args.data());
         std::fprintf(stderr, "[%s] cannot execute %s: %s\n", role.c_str(), args[0], std::strerror(errno));
