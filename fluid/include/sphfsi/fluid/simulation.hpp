@@ -28,7 +28,7 @@ struct WindowStats {
     int max_iterations = 0;             // most corrections in one step
     double dt_min = 0.0, dt_max = 0.0, dt_last = 0.0;
     double max_density_error = 0.0;     // largest (rho - rho0)/rho0 of a fluid particle (PCISPH: predicted)
-    int retries = 0;                    // PCISPH steps halved for not converging
+    int retries = 0;                    // PCISPH steps halved for not converging or moving beyond reach
 };
 
 class Simulation2D {
@@ -109,6 +109,7 @@ private:
     void step_verlet(double dt);
     void step_predictor_corrector(double dt);
     double step_pcisph(double dt, bool adaptive, WindowStats& ws);
+    double max_predicted_displacement() const;  // of the PCISPH prediction in pci_, fluid particles
     void accumulate_solid_forces(double weight);
     void wrap_periodic();
     double check_state();
