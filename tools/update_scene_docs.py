@@ -30,6 +30,7 @@ if __name__ == "__main__":
         sys.exit(__doc__)
     with open(DOC) as f:
         head, _, tail = split(f.read())
+    text = generated(sys.argv[1])  # before opening the doc for writing: a failure must not empty it
     with open(DOC, "w") as f:
-        f.write(head + BEGIN + "\n" + generated(sys.argv[1]) + "\n" + END + tail)
+        f.write(head + BEGIN + "\n" + text + "\n" + END + tail)
     print(f"updated {DOC}")
