@@ -82,6 +82,20 @@ def added_mass():
                 axes[0].annotate("diverged", (x, 300), fontsize=7, color=line.get_color(),
                                  textcoords="offset points", xytext=(4, -10))
         axes[1].semilogx([x for x, o in zip(ratio, ok) if o], [i for i, o in zip(it, ok) if o], marker=mk, label=m)
+    # The explicit scheme's failure point: between its last stable ratio and the first unstable one
+    # (max |u - w| > |w| or a failed run), drawn on both panels.
+    expl = sorted((r for r in rs if r["method"] == "serial-explicit"), key=lambda r: -num(r["structure.material.rho"]))
+    last_ok = None
+    for r in expl:
+        x = num(r["structure.material.rho"]) * 0.02 / (1000 * 0.2)
+        if r["status"] != "completed" or num(r["mid.max_rel"]) > 1.0:
+            edge = math.sqrt(x * last_ok) if last_ok else x
+            for ax in axes:
+                ax.axvline(edge, color="r", lw=1.0, ls=":")
+            axes[1].annotate("serial-explicit\nunstable beyond", (edge, 0.88), xycoords=("data", "axes fraction"),
+                             fontsize=7, color="r", textcoords="offset points", xytext=(3, 0))
+            break
+        last_ok = x
     axes[0].axhline(1.0, color="k", lw=0.8, ls="--")
     axes[0].annotate("undamped overshoot of a sudden load", (8, 1.15), fontsize=7)
     axes[0].set_ylabel("max |u - w| / |w|, mid-span (x: run failed)")

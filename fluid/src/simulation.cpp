@@ -303,10 +303,8 @@ void Simulation2D::evaluate() {
             if (!fluid) P.v_visc[i] = P.v[i];
         }
         if (!dummy) {
-            auto density_of = [&](double p) {
-                return pcisph ? s_.rho0 : tait ? tait_.density(p) : standard_.density(p);
-            };
-            extrapolate_boundary_state(P, grid_, kw, rates_.gravity, s_.clamp_negative, density_of,
+            extrapolate_boundary_state(P, grid_, kw, rates_.gravity, s_.clamp_negative,
+                                       [&](double p) { return boundary_density(p); },
                                        [&](std::uint32_t w) { return boundary_acceleration(w); });
             if (pcisph) {
 #pragma omp parallel for schedule(static)
@@ -322,6 +320,100 @@ void Simulation2D::evaluate() {
     });
     reduce_rates();
     st_.rates_fresh = true;
+}
+
+double Simulation2D::boundary_density(double p) const {
+    if (s_.pressure == PressureModel::Pcisph) return s_.rho0;
+    return s_.pressure == PressureModel::Wcsph ? tait_.density(p) : standard_.density(p);
+}
+
+// A coupling window starts: the solid particles take the new window's kinematics, and the rates that start
+// the window's first step must be those of the new window's wall acceleration.
+//
+// Why. The rates at the window start were evaluated at the end of the previous window (for the dt_wanted
+// of the reply, or by velocity Verlet's closing evaluation) and are kept as fresh: the particles have not
+// moved since. But they were evaluated with the previous window's kinematics, and one thing in them depends
+// on the window: the Adami wall pressure of a solid particle, p_w = (sum_f p_f W + (g - a_w) . sum_f rho_f
+// (x_w - x_f) W) / sum_f W, holds the solid's acceleration a_w = (v1 - v0) / dt over the window (the
+// interface moves with a constant acceleration between the window-start and window-end velocities). With
+// the stale rates, the first step of a window, and with one fluid step per window (the thesis rule) the
+// whole window, pushed the fluid and reported the force with the previous window's a_w: the fluid's force
+// did not depend on this window's structure iterate at all, an implicit coupling converged in one update
+// and it felt the fluid's added mass one window late, which is no more stable than an explicit scheme
+// (docs/validation.md, "Added mass").
+//
+// What is right. In the semi-implicit (symplectic) Euler step v^{n+1} = v^n + dt a(x^n), the fluid next to
+// the wall must accelerate with the wall over the same step: the pressure's wall condition
+// dp/dn = rho (g - a_w) . n is the step's Neumann condition, and a_w is the wall's velocity change over
+// this step, (v1 - v0) / dt of the window the step lies in. The positions and velocities of the solid at
+// the step's start are the window's start values, known before the window. So the force of the window is
+// evaluated at the start-of-window state with the window's own (iterated) wall acceleration; the same rates
+// kick the fluid, so the force reported is still exactly minus the fluid's momentum change from the solids
+// (momentum is conserved across the interface), and after RESTORE each iterate gets its own a_w. (Reporting
+// the end-of-window force instead would make the force depend on the iterate too, but it is not the force
+// that moved the fluid.) The wall acceleration term is the instantaneous part of the added mass: about the
+// fluid within a kernel support of the wall, which is also what a compressible fluid can add within one
+// step (rho_f c dt with dt = CFL h / c).
+//
+// How. Only the solids' extrapolated pressure and density change, so only the solid particles and the fluid
+// particles within a support of one are recomputed, each exactly as a full evaluation would (same state,
+// same neighbour order); for symplectic Euler and predictor-corrector nothing else has changed since the
+// end-of-window evaluation, so the rates are those of a full evaluation at a fraction of its cost. (Velocity Verlet's closing evaluation saw v^{n+1/2}; the recomputed particles see v^{n+1}, as
+// a full evaluation at the window start would.) With dummy walls (no a_w in the wall pressure) and PCISPH
+// (a_w enters its pressure solve, which reads it from solid_acc_) nothing else needs recomputing.
+void Simulation2D::refresh_solid_rates() {
+    if (n_solid_ == 0 || !kinematics_ || !st_.rates_fresh) return;  // else the first step evaluates anyway
+    auto& P = st_.P;
+    const std::size_t n = P.size();
+    solid_xv_.clear();
+    for (std::size_t i = 0; i < n; ++i)
+        if (P.kind[i] == Kind::Solid) {
+            solid_xv_.push_back(P.x[i]);
+            solid_xv_.push_back(P.v[i]);
+        }
+    move_solids(st_.t);
+    bool same = true;
+    for (std::size_t i = 0, k = 0; i < n && same; ++i)
+        if (P.kind[i] == Kind::Solid) {
+            same = P.x[i] == solid_xv_[k] && P.v[i] == solid_xv_[k + 1];
+            k += 2;
+        }
+    if (!same) {  // the window does not start where the last one ended (not the case in a coupled run)
+        evaluate();
+        return;
+    }
+    if (s_.wall == WallModel::Dummy || s_.pressure == PressureModel::Pcisph) return;
+    const long long nn = static_cast<long long>(n);
+    near_solid_.assign(n, 0);
+    with_kernels<Dim>(s_.kernel, h_, [&](const auto& kw, const auto& kg) {
+        extrapolate_boundary_state(P, grid_, kw, rates_.gravity, s_.clamp_negative,
+                                   [&](double p) { return boundary_density(p); },
+                                   [&](std::uint32_t w) { return boundary_acceleration(w); }, true);
+        // Mark the solids and their fluid neighbours (a hair beyond the support: marking one too many costs
+        // nothing, it is recomputed to the same value).
+        const double R2 = grid_.radius2() * (1.0 + 1e-9);
+        grid_.for_each_cell([&](std::uint32_t cell, std::uint32_t begin, std::uint32_t end) {
+            typename CellGrid<Dim>::Range ranges[CellGrid<Dim>::max_ranges];
+            int nr = -1;
+            for (std::uint32_t w = begin; w < end; ++w) {
+                if (P.kind[w] != Kind::Solid) continue;
+                near_solid_[w] = 1;
+                if (nr < 0) nr = grid_.ranges(cell, ranges);
+                for (int r = 0; r < nr; ++r)
+                    for (std::uint32_t f = ranges[r].begin; f < ranges[r].end; ++f)
+                        if (P.kind[f] == Kind::Fluid && norm2(P.x[w] - (P.x[f] + ranges[r].shift)) < R2) near_solid_[f] = 1;
+            }
+        });
+        // All of them: pr2_ is scratch, not state (after RESTORE it holds another state's values).
+        pr2_.resize(n);
+#pragma omp parallel for schedule(static)
+        for (long long q = 0; q < nn; ++q) {
+            const std::size_t i = static_cast<std::size_t>(q);
+            pr2_[i] = P.p[i] / (P.rho[i] * P.rho[i]);
+        }
+        compute_rates(P, grid_, kg, ViscosityKernel<Dim>(h_), pr2_, rates_, near_solid_.data());
+    });
+    reduce_rates();
 }
 
 void Simulation2D::reduce_rates() {
@@ -614,6 +706,7 @@ WindowStats Simulation2D::advance(double t_end, std::uint32_t substeps, const st
     ws.dt_min = std::numeric_limits<double>::infinity();
     st_.solid_force_sum.assign(n_solid_, V{});
     st_.solid_weight = 0.0;
+    refresh_solid_rates();  // the window's wall acceleration into rates kept from the last window's end
     const double t_start = st_.t;
     auto record = [&](double dt) {
         ++ws.steps;

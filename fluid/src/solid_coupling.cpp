@@ -92,8 +92,13 @@ void InterfaceCoupling::kinematics(std::size_t k, double t, Vec2& x, Vec2& v, Ve
     a = Vec2{};
     for (int q = 0; q < 4; ++q) {
         const std::size_t i = static_cast<std::size_t>(w.vertex[q]);
-        const Vec2 u = state_.u0[i] + (state_.u1[i] - state_.u0[i]) * s;
-        const Vec2 vel = state_.v0[i] + (state_.v1[i] - state_.v0[i]) * s;
+        // At s = 1 the end values themselves (u0 + (u1 - u0) need not round to u1): a window's end and the
+        // next window's start then put the solid particles at bitwise the same place, which lets the fluid
+        // keep the rates of its end-of-window evaluation and only redo the part that depends on the new
+        // window's acceleration (Simulation2D::refresh_solid_rates).
+        const bool end = s >= 1.0;
+        const Vec2 u = end ? state_.u1[i] : state_.u0[i] + (state_.u1[i] - state_.u0[i]) * s;
+        const Vec2 vel = end ? state_.v1[i] : state_.v0[i] + (state_.v1[i] - state_.v0[i]) * s;
         x += u * w.weight[q];
         v += vel * w.weight[q];
         a += (state_.v1[i] - state_.v0[i]) * (inv_dt * w.weight[q]);

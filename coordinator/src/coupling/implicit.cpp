@@ -5,6 +5,7 @@
 #include <cmath>
 #include <deque>
 #include <sstream>
+#include <vector>
 
 #include "sphfsi/coordinator/coupling.hpp"
 
@@ -21,12 +22,20 @@ F64Array to_array(const Vec& x, const F64Array& like) {
     return a;
 }
 
-// Proposes the next iterate x_{k+1} from x_k and H(x_k) = x~_k.
+// Proposes the next iterate x_{k+1} from x_k and H(x_k) = x~_k. An iterate is the interface displacements
+// (its first np entries: the primary data, whose residual drives the relaxation factor, the least squares
+// and the convergence test) followed by the interface velocities (secondary data, as in preCICE: updated
+// with the same factor or the same combination of secant pairs). The fluid's force depends on the velocity
+// too (the wall acceleration (v1 - v0) / dt in its wall pressure, the added mass): an unrelaxed velocity
+// would feed the structure's raw answer back and diverge as soon as the added mass exceeds about twice the
+// structure's, whatever the displacement's relaxation. Relaxed alike, displacement and velocity remain the
+// structure's answer to one and the same (combined) force, so a zero displacement residual also means
+// consistent velocities.
 class Accelerator {
 public:
     virtual ~Accelerator() = default;
     virtual void begin_window() = 0;
-    virtual Vec next(const Vec& x, const Vec& x_tilde) = 0;
+    virtual Vec next(const Vec& x, const Vec& x_tilde, Eigen::Index np) = 0;
     virtual void end_window() {}
 };
 
@@ -34,7 +43,7 @@ class ConstantRelaxation : public Accelerator {
 public:
     explicit ConstantRelaxation(double w) : w_(w) {}
     void begin_window() override {}
-    Vec next(const Vec& x, const Vec& xt) override { return x + w_ * (xt - x); }
+    Vec next(const Vec& x, const Vec& xt, Eigen::Index) override { return x + w_ * (xt - x); }
 
 private:
     double w_;
@@ -44,8 +53,9 @@ class Aitken : public Accelerator {
 public:
     explicit Aitken(double w0) : w0_(w0) {}
     void begin_window() override { have_prev_ = false; }
-    Vec next(const Vec& x, const Vec& xt) override {
-        Vec r = xt - x;
+    Vec next(const Vec& x, const Vec& xt, Eigen::Index np) override {
+        const Vec r_all = xt - x;
+        Vec r = r_all.head(np);
         if (!have_prev_) {
             w_ = w0_;  // the first iteration of a window starts from the scene's relaxation factor
         } else {
@@ -55,7 +65,7 @@ public:
         }
         r_prev_ = r;
         have_prev_ = true;
-        return x + w_ * r;
+        return x + w_ * r_all;
     }
 
 private:
@@ -72,8 +82,9 @@ public:
         V_.clear();
         W_.clear();
     }
-    Vec next(const Vec& x, const Vec& xt) override {
-        Vec r = xt - x;
+    Vec next(const Vec& x, const Vec& xt, Eigen::Index np) override {
+        const Vec r_all = xt - x;
+        Vec r = r_all.head(np);
         if (have_prev_) {
             V_.push_front(r - r_prev_);
             W_.push_front(xt - xt_prev_);
@@ -83,8 +94,9 @@ public:
         have_prev_ = true;
         std::size_t cols = V_.size();
         for (const auto& old : past_) cols += old.first.size();
-        if (cols == 0) return x + w0_ * r;
-        Eigen::MatrixXd V(r.size(), static_cast<Eigen::Index>(cols)), W(r.size(), static_cast<Eigen::Index>(cols));
+        if (cols == 0) return x + w0_ * r_all;
+        // V: differences of the displacement residuals; W: differences of the images, velocities included.
+        Eigen::MatrixXd V(r.size(), static_cast<Eigen::Index>(cols)), W(xt.size(), static_cast<Eigen::Index>(cols));
         Eigen::Index c = 0;
         auto add = [&](const std::deque<Vec>& vs, const std::deque<Vec>& ws) {
             for (std::size_t i = 0; i < vs.size(); ++i, ++c) {
@@ -94,11 +106,35 @@ public:
         };
         add(V_, W_);
         for (const auto& [vs, ws] : past_) add(vs, ws);
-        // Least squares min |V a + r|; the rank-revealing QR drops (nearly) dependent secant pairs.
-        Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(V);
-        qr.setThreshold(1e-10);
-        Vec a = qr.solve(-r);
-        return xt + W * a;
+        // Filter (QR2, Haelterman et al. 2016): Gram-Schmidt over the columns, newest first; a column whose
+        // part orthogonal to the ones kept is below `filter` of its own norm is dropped with its W column.
+        // Nearly dependent secant pairs (an old window's, or one that the fluid's pressure clamp made flat)
+        // otherwise let the least squares fit the residual with huge coefficients and throw the iterate far
+        // off: with the fluid's force depending on the iterate (added mass) that happened within the first
+        // windows of the added-mass scene.
+        const double filter = 1e-2;
+        Eigen::MatrixXd Q(V.rows(), V.cols());
+        std::vector<Eigen::Index> kept;
+        for (Eigen::Index j = 0; j < V.cols(); ++j) {
+            Vec q = V.col(j);
+            const double n0 = q.norm();
+            if (!(n0 > 0.0)) continue;
+            for (int pass = 0; pass < 2; ++pass)  // twice: Gram-Schmidt is then orthogonal to round-off
+                for (std::size_t k = 0; k < kept.size(); ++k) q -= Q.col(static_cast<Eigen::Index>(k)).dot(q) * Q.col(static_cast<Eigen::Index>(k));
+            const double n1 = q.norm();
+            if (n1 < filter * n0) continue;
+            Q.col(static_cast<Eigen::Index>(kept.size())) = q / n1;
+            kept.push_back(j);
+        }
+        if (kept.empty()) return x + w0_ * r_all;
+        Eigen::MatrixXd Vk(V.rows(), static_cast<Eigen::Index>(kept.size())), Wk(W.rows(), static_cast<Eigen::Index>(kept.size()));
+        for (std::size_t k = 0; k < kept.size(); ++k) {
+            Vk.col(static_cast<Eigen::Index>(k)) = V.col(kept[k]);
+            Wk.col(static_cast<Eigen::Index>(k)) = W.col(kept[k]);
+        }
+        // Least squares min |V a + r| over the kept columns.
+        Vec a = Vk.colPivHouseholderQr().solve(-r);
+        return xt + Wk * a;
     }
     void end_window() override {
         if (reuse_ == 0 || V_.empty()) return;
@@ -129,7 +165,10 @@ public:
         session_.save("structure");
         F64Array d, v;
         predict(predictor_, s, p.dt, d, v);
-        Vec x = to_vec(d);
+        // The iterate: displacements, then velocities (see Accelerator).
+        const Eigen::Index nd = static_cast<Eigen::Index>(d.values.size());
+        Vec x(2 * nd);
+        x << to_vec(d), to_vec(v);
         acc_->begin_window();
         WindowOutcome o;
         std::uint32_t fluid_substeps = 0, structure_substeps = 0, fluid_iters = 0, structure_iters = 0;
@@ -140,7 +179,8 @@ public:
                 session_.restore("structure");
             }
             o.fluid = session_.advance("fluid", p.t, p.dt, p.fluid_substeps, k,
-                                       Fields{{"displacement", to_array(x, d)}, {"velocity", v}});
+                                       Fields{{"displacement", to_array(x.head(nd), d)},
+                                              {"velocity", to_array(x.tail(nd), v)}});
             const F64Array& f = vertex_field("fluid", o.fluid.reply.outputs, "force", n);
             o.structure = session_.advance("structure", p.t, p.dt, p.structure_substeps, k, Fields{{"force", f}});
             const F64Array& d_new = vertex_field("structure", o.structure.reply.outputs, "displacement", n);
@@ -154,11 +194,13 @@ public:
             structure_compute += o.structure.reply.compute_s;
             fluid_trip += o.fluid.roundtrip_s;
             structure_trip += o.structure.roundtrip_s;
-            Vec xt = to_vec(d_new);
+            Vec xt(2 * nd);
+            xt << to_vec(d_new), to_vec(v_new);
             // Converged when |r| <= tol_rel |d~| + tol_abs sqrt(n): tol_abs is an RMS length per vertex.
-            o.residual = (xt - x).norm();
+            // Displacements only: with velocities relaxed alike they then agree too (see Accelerator).
+            o.residual = (xt.head(nd) - x.head(nd)).norm();
             o.iterations = static_cast<std::uint32_t>(k + 1);
-            double bound = tol_rel_ * xt.norm() + tol_abs_ * std::sqrt(static_cast<double>(n));
+            double bound = tol_rel_ * xt.head(nd).norm() + tol_abs_ * std::sqrt(static_cast<double>(n));
             o.converged = o.residual <= bound;
             if (o.converged || k + 1 >= max_iter_) {
                 s.force = f;
@@ -168,10 +210,7 @@ public:
                 s.velocity = v_new;
                 break;
             }
-            // The velocity is not relaxed: the fluid takes the structure's latest, which is consistent
-            // with the displacement once the iterations converge.
-            v = v_new;
-            x = acc_->next(x, xt);
+            x = acc_->next(x, xt, nd);
         }
         acc_->end_window();
         o.fluid.reply.substeps = fluid_substeps;

@@ -46,9 +46,11 @@ inline Vec<Dim> repulsive_acceleration(double d, double r0, const Vec<Dim>& dx, 
     return dx * (d * (q4 * q4 * q4 - q4) / r2);
 }
 
+// `only`: when given, only the particles i with only[i] != 0 are computed (the others keep their rates);
+// each is computed exactly as in a full pass.
 template <int Dim, class KernelG>
 void compute_rates(ParticleStore<Dim>& P, const CellGrid<Dim>& grid, const KernelG& kg, const ViscosityKernel<Dim>& vk,
-                   const std::vector<double>& pr2, const RateParams<Dim>& prm) {
+                   const std::vector<double>& pr2, const RateParams<Dim>& prm, const std::uint8_t* only = nullptr) {
     using V = Vec<Dim>;
     const double R2 = grid.radius2(), m = prm.mass;
     const bool diffusion = prm.continuity && prm.diffusion.model != DensityDiffusion::None;
@@ -64,6 +66,7 @@ void compute_rates(ParticleStore<Dim>& P, const CellGrid<Dim>& grid, const Kerne
         typename CellGrid<Dim>::Range ranges[CellGrid<Dim>::max_ranges];
         const int nr = grid.ranges(cell, ranges);
         for (std::uint32_t i = begin; i < end; ++i) {
+            if (only && !only[i]) continue;
             const Kind ki = kind[i];
             const V xi = x[i];
             const double rho_i = rho[i];

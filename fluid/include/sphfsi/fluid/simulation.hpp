@@ -99,6 +99,8 @@ private:
     };
 
     void evaluate();
+    void refresh_solid_rates();
+    double boundary_density(double p) const;
     void sort_particles();
     void move_solids(double t);
     void reduce_rates();
@@ -135,6 +137,8 @@ private:
     V domain_lo_, domain_hi_;
     SolidKinematics kinematics_;
     std::vector<V> solid_acc_;  // kinematic acceleration by solid index (Adami's a_w)
+    std::vector<V> solid_xv_;   // scratch of refresh_solid_rates: solid positions and velocities
+    std::vector<std::uint8_t> near_solid_;  // scratch of refresh_solid_rates: particles whose rates see a solid
 
     State st_, saved_;
     bool has_saved_ = false;

@@ -16,17 +16,18 @@ namespace sphfsi::fluid {
 
 // `density_of` maps an extrapolated pressure to a density; `acceleration_of(w)` is the boundary particle's
 // own acceleration (zero for fixed walls, the kinematic acceleration of a moving solid particle).
+// `solids_only`: leave wall particles alone (a coupling window's new acceleration changes only the solids').
 template <int Dim, class KernelW, class DensityOf, class AccelerationOf>
 void extrapolate_boundary_state(ParticleStore<Dim>& P, const CellGrid<Dim>& grid, const KernelW& kw,
                                 const Vec<Dim>& gravity, bool clamp_negative, DensityOf&& density_of,
-                                AccelerationOf&& acceleration_of) {
+                                AccelerationOf&& acceleration_of, bool solids_only = false) {
     using V = Vec<Dim>;
     const double R2 = grid.radius2();
     grid.for_each_cell_parallel([&](std::uint32_t cell, std::uint32_t begin, std::uint32_t end) {
         typename CellGrid<Dim>::Range ranges[CellGrid<Dim>::max_ranges];
         int nr = -1;
         for (std::uint32_t w = begin; w < end; ++w) {
-            if (!is_boundary(P.kind[w])) continue;
+            if (solids_only ? P.kind[w] != Kind::Solid : !is_boundary(P.kind[w])) continue;
             if (nr < 0) nr = grid.ranges(cell, ranges);
             const V xw = P.x[w];
             double sum_w = 0.0, sum_p = 0.0;
