@@ -49,9 +49,12 @@ void write_checkpoint(const std::filesystem::path& file, const Checkpoint& c) {
     pack_array(pk, c.interface.displacement);
     pack_array(pk, c.interface.velocity);
     pack_array(pk, c.interface.previous_displacement);
-    pk.pack_array(2);
+    pk.pack_array(5);
     pack_array(pk, c.interface.force);
     pk.f64(c.interface.previous_dt);
+    pack_array(pk, c.interface.fluid_displacement);
+    pk.f64(c.interface.work_total);
+    pk.f64(c.interface.created_total);
     pk.pack_map(static_cast<std::uint32_t>(c.states.size()));
     for (const auto& [role, bytes] : c.states) {
         pk.pack(role);
@@ -97,8 +100,16 @@ Checkpoint read_checkpoint(const std::filesystem::path& file) {
         c.interface.displacement = unpack_array(i.ptr[3]);
         c.interface.velocity = unpack_array(i.ptr[4]);
         c.interface.previous_displacement = unpack_array(i.ptr[5]);
-        c.interface.force = unpack_array(a.ptr[12].via.array.ptr[0]);
-        c.interface.previous_dt = a.ptr[12].via.array.ptr[1].as<double>();
+        const auto& coupling = a.ptr[12].via.array;
+        c.interface.force = unpack_array(coupling.ptr[0]);
+        c.interface.previous_dt = coupling.ptr[1].as<double>();
+        // (Checkpoints written before the interface energy balance lack it: the fluid's displacement then
+        // starts from the structure's and the balance from zero.)
+        c.interface.fluid_displacement = coupling.size > 2 ? unpack_array(coupling.ptr[2]) : c.interface.displacement;
+        if (coupling.size > 4) {
+            c.interface.work_total = coupling.ptr[3].as<double>();
+            c.interface.created_total = coupling.ptr[4].as<double>();
+        }
         const auto& m = a.ptr[13].via.map;
         for (std::uint32_t k = 0; k < m.size; ++k) {
             const auto& bin = m.ptr[k].val.via.bin;

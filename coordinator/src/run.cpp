@@ -2,6 +2,7 @@
 
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -9,10 +10,12 @@
 #include <iostream>
 #include <optional>
 #include <random>
+#include <sstream>
 
 #include "sphfsi/coordinator/checkpoint.hpp"
 #include "sphfsi/coordinator/coupling.hpp"
 #include "sphfsi/coordinator/hub.hpp"
+#include "sphfsi/coordinator/interface_energy.hpp"
 #include "sphfsi/coordinator/launcher.hpp"
 #include "sphfsi/coordinator/progress.hpp"
 #include "sphfsi/coordinator/recorder.hpp"
@@ -76,7 +79,7 @@ private:
     void loop();
     WindowOutcome advance_alone(const WindowPlan& plan);
     WindowPlan plan_window(double t_stop) const;
-    void record_window(const WindowPlan& plan, const WindowOutcome& o, double wall_s);
+    void record_window(const WindowPlan& plan, const WindowOutcome& o, double wall_s, const InterfaceWork& work);
     void snapshot_all();
     void checkpoint();
 
@@ -163,6 +166,10 @@ int Runner::execute() {
     recorder_->set_number("coordinator_cpu_s", cpu);
     recorder_->set_number("wall_s", wall_in_loop_s_);
     recorder_->set_number("messaging_and_waiting_s", messaging_total_s_);
+    if (coupled_) {
+        recorder_->set_number("interface_work", iface_.work_total);
+        recorder_->set_number("interface_energy_created", iface_.created_total);
+    }
     recorder_->set_status(status);
     recorder_->flush();
     if (watchpoints_) watchpoints_->flush();
@@ -290,6 +297,7 @@ void Runner::loop() {
         double t_ckpt = (checkpoint_index_ + 1) * checkpoint_dt_;
         double t_stop = std::min({t_out, t_ckpt, end_});
         WindowPlan plan = plan_window(t_stop);
+        const F64Array structure_start = iface_.displacement, fluid_start = iface_.fluid_displacement;
         auto start = Clock::now();
         WindowOutcome o = coupled_ ? scheme_->run(plan, iface_) : advance_alone(plan);
         double wall = std::chrono::duration<double>(Clock::now() - start).count();
@@ -298,7 +306,10 @@ void Runner::loop() {
         if (structure_) structure_dt_ = o.structure.reply.dt_wanted;
         ++windows_;
         steps_ += fluid_ ? o.fluid.reply.substeps : o.structure.reply.substeps;
-        record_window(plan, o, wall);
+        InterfaceWork work;
+        if (coupled_)
+            work = interface_work(iface_.force, structure_start, iface_.displacement, fluid_start, iface_.fluid_displacement);
+        record_window(plan, o, wall, work);
         if (watchpoints_) watchpoints_->write(t_, iface_.displacement);
         progress_->update(t_, steps_);
         if (t_ >= output_index_ * output_dt_ - eps) snapshot_all();
@@ -306,7 +317,7 @@ void Runner::loop() {
     }
 }
 
-void Runner::record_window(const WindowPlan& p, const WindowOutcome& o, double wall_s) {
+void Runner::record_window(const WindowPlan& p, const WindowOutcome& o, double wall_s, const InterfaceWork& work) {
     // Messaging and waiting: the part of each round trip not spent computing in the participant.
     double fluid_overhead = fluid_ ? std::max(0.0, o.fluid.roundtrip_s - o.fluid.reply.compute_s) : 0.0;
     double structure_overhead = structure_ ? std::max(0.0, o.structure.roundtrip_s - o.structure.reply.compute_s) : 0.0;
@@ -333,6 +344,12 @@ void Runner::record_window(const WindowPlan& p, const WindowOutcome& o, double w
         {"messaging_s", fluid_overhead + structure_overhead},
         {"wall_s", wall_s},
     };
+    if (coupled_) {
+        iface_.work_total += work.on_structure;
+        iface_.created_total += work.created;
+        row.emplace_back("interface_work", work.on_structure);
+        row.emplace_back("interface_energy_created", work.created);
+    }
     // Numbers a participant reports in ADVANCED.stats (e.g. the fluid's largest density error) become
     // columns "ROLE.NAME"; the set is fixed by the first window, later windows fill missing ones with NaN.
     auto add_stats = [&](const std::string& role, const Value& stats) {

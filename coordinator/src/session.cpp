@@ -35,8 +35,9 @@ void Session::restore(const std::string& role) {
 void InterfaceState::reset(const InterfaceMesh& m) {
     mesh = m;
     const auto n = m.vertices.rows();
-    displacement = velocity = previous_displacement = force = F64Array::zeros(n, 2);
+    displacement = velocity = previous_displacement = force = fluid_displacement = F64Array::zeros(n, 2);
     previous_dt = 0.0;
+    work_total = created_total = 0.0;
 }
 
 const F64Array& vertex_field(const std::string& role, const Fields& fields, const std::string& name, std::size_t vertices) {

@@ -41,6 +41,7 @@ public:
         WindowOutcome o;
         o.fluid = session_.advance("fluid", p.t, p.dt, p.fluid_substeps, 0, kinematics(d, v));
         s.force = vertex_field("fluid", o.fluid.reply.outputs, "force", s.vertices());
+        s.fluid_displacement = d;
         o.structure = session_.advance("structure", p.t, p.dt, p.structure_substeps, 0, Fields{{"force", s.force}});
         accept_structure(s, o.structure, p.dt);
         return o;
@@ -65,6 +66,7 @@ public:
         o.fluid = session_.finish_advance("fluid", fseq);
         o.structure = session_.finish_advance("structure", sseq);
         s.force = vertex_field("fluid", o.fluid.reply.outputs, "force", s.vertices());
+        s.fluid_displacement = d;
         accept_structure(s, o.structure, p.dt);
         return o;
     }

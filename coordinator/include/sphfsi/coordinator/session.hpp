@@ -38,6 +38,11 @@ struct InterfaceState {
     protocol::F64Array displacement, velocity;  // structure's latest (n, 2)
     protocol::F64Array previous_displacement;   // one window earlier, for the quadratic predictor
     protocol::F64Array force;                   // fluid's latest (n, 2)
+    // Where the fluid last moved the interface to (the predicted or iterated window-end displacement it was
+    // given): the other side of the interface energy balance (docs/coupling.md).
+    protocol::F64Array fluid_displacement;
+    // The balance since t0: work done on the structure and energy created at the interface [J/m].
+    double work_total = 0.0, created_total = 0.0;
     double previous_dt = 0.0;
 
     void reset(const protocol::InterfaceMesh& m);
