@@ -87,11 +87,17 @@ class Sweeper:
         self.stop = threading.Event()
         self.lock = threading.Lock()
         self.metric_lock = threading.Lock()  # h5py: one reader at a time
-        try:
-            st = os.stat(sphfsi)
-            self.build_stamp = f"{sphfsi} {int(st.st_mtime)} {st.st_size}"
-        except OSError:
-            self.build_stamp = sphfsi
+        # Every program a run may start (the coordinator starts the participants from its own folder): a
+        # rebuilt fluid or structure changes results as much as a rebuilt coordinator.
+        parts = []
+        for program in ("sphfsi", "sphfsi-fluid", "sphfsi-structure"):
+            path = os.path.join(os.path.dirname(sphfsi), program)
+            try:
+                st = os.stat(path)
+                parts.append(f"{path} {int(st.st_mtime)} {st.st_size}")
+            except OSError:
+                parts.append(path)
+        self.build_stamp = "; ".join(parts)
         self.reused_other_build = False
         self.metric_columns = []
         self.metric_errors = []
