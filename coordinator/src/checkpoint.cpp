@@ -49,12 +49,13 @@ void write_checkpoint(const std::filesystem::path& file, const Checkpoint& c) {
     pack_array(pk, c.interface.displacement);
     pack_array(pk, c.interface.velocity);
     pack_array(pk, c.interface.previous_displacement);
-    pk.pack_array(5);
+    pk.pack_array(6);
     pack_array(pk, c.interface.force);
     pk.f64(c.interface.previous_dt);
     pack_array(pk, c.interface.fluid_displacement);
     pk.f64(c.interface.work_total);
     pk.f64(c.interface.created_total);
+    pk.f64(c.interface.fluid_energy);
     pk.pack_map(static_cast<std::uint32_t>(c.states.size()));
     for (const auto& [role, bytes] : c.states) {
         pk.pack(role);
@@ -106,9 +107,10 @@ Checkpoint read_checkpoint(const std::filesystem::path& file) {
         // (Checkpoints written before the interface energy balance lack it: the fluid's displacement then
         // starts from the structure's and the balance from zero.)
         c.interface.fluid_displacement = coupling.size > 2 ? unpack_array(coupling.ptr[2]) : c.interface.displacement;
-        if (coupling.size > 4) {
+        if (coupling.size > 5) {
             c.interface.work_total = coupling.ptr[3].as<double>();
             c.interface.created_total = coupling.ptr[4].as<double>();
+            c.interface.fluid_energy = coupling.ptr[5].as<double>();
         }
         const auto& m = a.ptr[13].via.map;
         for (std::uint32_t k = 0; k < m.size; ++k) {

@@ -855,6 +855,19 @@ std::size_t Simulation2D::free_surface_count() const {
     return n;
 }
 
+Simulation2D::Energy Simulation2D::mechanical_energy() const {
+    const auto& P = st_.P;
+    V g{};
+    for (int k = 0; k < Dim; ++k) g[k] = s_.gravity[static_cast<std::size_t>(k)];
+    Energy e;
+    for (std::size_t i = 0; i < P.size(); ++i) {
+        if (P.kind[i] != Kind::Fluid) continue;
+        e.kinetic += 0.5 * mass_ * norm2(P.v[i]);
+        e.potential -= mass_ * dot(g, P.x[i]);
+    }
+    return e;
+}
+
 std::size_t Simulation2D::memory_bytes() const {
     return st_.P.memory_bytes() + grid_.memory_bytes() + order_.capacity() * sizeof(std::uint32_t) +
            sort_scratch_.capacity() + (pr2_.capacity() + rho_tmp_.capacity()) * sizeof(double) + pci_.memory_bytes();

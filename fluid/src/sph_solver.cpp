@@ -164,6 +164,9 @@ protocol::AdvanceReply SphSolver::advance(const protocol::AdvanceRequest& reques
     stats["pcisph_max_iterations"] = Value(static_cast<std::int64_t>(ws.max_iterations));
     stats["pcisph_retries"] = Value(static_cast<std::int64_t>(ws.retries));
     stats["max_speed"] = Value(sim_->particles().size() ? sim_->max_speed() : 0.0);
+    const auto energy = sim_->mechanical_energy();
+    stats["kinetic_energy"] = Value(energy.kinetic);
+    stats["potential_energy"] = Value(energy.potential);
     stats["escaped_particles"] = Value(static_cast<std::int64_t>(sim_->escaped_count()));
     stats["free_surface_particles"] = Value(static_cast<std::int64_t>(sim_->free_surface_count()));
     // Fluid particles more than 0.1 dp beyond a tank wall surface or inside an obstacle at the window's end

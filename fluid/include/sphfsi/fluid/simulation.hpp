@@ -60,6 +60,10 @@ public:
     double max_speed() const { return st_.u_max; }
     std::uint64_t escaped_count() const { return st_.escaped; }
     std::size_t free_surface_count() const;
+    // Kinetic and gravitational potential energy of the fluid particles in the tank [J/m in 2D], the
+    // potential measured from y = 0 (the tank floor) along gravity.
+    struct Energy { double kinetic = 0.0, potential = 0.0; };
+    Energy mechanical_energy() const;
     std::uint64_t step_count() const { return st_.step; }
     const ParticleStore<Dim>& particles() const { return st_.P; }
     std::size_t fluid_count() const { return n_fluid_; }
