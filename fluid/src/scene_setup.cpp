@@ -8,29 +8,10 @@ namespace {
 
 int count_along(double length, double dp) { return std::max(1, static_cast<int>(std::lround(length / dp))); }
 
-struct Builder {
-    Scene2D& scene;
-    void add(double x, double y, Kind kind, int tag, Vec2 velocity = {}) {
-        auto& P = scene.particles;
-        P.x.push_back(Vec2{{x, y}});
-        P.v.push_back(velocity);
-        P.rho.push_back(0.0);
-        P.id.push_back(static_cast<std::int32_t>(P.x.size() - 1));
-        P.tag.push_back(tag);
-        P.kind.push_back(kind);
-    }
-    // Fills [x0, x0 + nx*sx] x [y0, y0 + ny*sy] with particles at cell centres.
-    void fill(double x0, double y0, int nx, int ny, double sx, double sy, Kind kind, int tag, Vec2 velocity = {}) {
-        for (int j = 0; j < ny; ++j)
-            for (int i = 0; i < nx; ++i) add(x0 + (i + 0.5) * sx, y0 + (j + 0.5) * sy, kind, tag, velocity);
-    }
-};
-
-}  // namespace
-
-Scene2D build_scene(const FluidSettings& s) {
-    Scene2D scene;
-    Builder b{scene};
+// Calls emit(position, velocity, kind, tag, column_top) for every particle of the scene in id order: water
+// blocks (column_top: the top of the particle's block), then tank walls and obstacles (column_top unused).
+template <class Emit>
+void lay_out(const FluidSettings& s, Emit&& emit) {
     const double dp = s.dp, W = s.tank_width, H = s.tank_height;
     const int L = s.wall_layers;
     const double T = L * dp;
@@ -46,29 +27,61 @@ Scene2D build_scene(const FluidSettings& s) {
                 int tag = w.tag;
                 if (w.split == DyeSplit::Vertical && 2 * i >= nx) tag = w.tag + 1;
                 if (w.split == DyeSplit::Horizontal && 2 * j >= ny) tag = w.tag + 1;
-                b.add(w.box.x0 + (i + 0.5) * sx, w.box.y0 + (j + 0.5) * sy, Kind::Fluid, tag);
-                scene.column_top.push_back(top);
+                emit(Vec2{{w.box.x0 + (i + 0.5) * sx, w.box.y0 + (j + 0.5) * sy}}, Vec2{}, Kind::Fluid, tag, top);
             }
     }
-    scene.n_fluid = scene.particles.size();
 
+    // Fills [x0, x0 + nx*sx] x [y0, y0 + ny*sy] with wall particles at cell centres.
+    const int wall_tag = -1;
+    auto fill = [&](double x0, double y0, int nx, int ny, double fx, double fy, Vec2 velocity = {}) {
+        for (int j = 0; j < ny; ++j)
+            for (int i = 0; i < nx; ++i)
+                emit(Vec2{{x0 + (i + 0.5) * fx, y0 + (j + 0.5) * fy}}, velocity, Kind::Wall, wall_tag, 0.0);
+    };
     const bool walls_x = !s.periodic[0], floor = !s.periodic[1], lid = s.closed_top && !s.periodic[1];
     const int nx_in = count_along(W, sx), ny_in = count_along(H, sy);
     const double x_lo = walls_x ? -T : 0.0;
     const int nx_out = nx_in + (walls_x ? 2 * L : 0);
-    const int wall_tag = -1;
-    if (floor) b.fill(x_lo, -T, nx_out, L, sx, dp, Kind::Wall, wall_tag);
+    if (floor) fill(x_lo, -T, nx_out, L, sx, dp);
     if (walls_x) {
-        b.fill(-T, 0.0, L, ny_in, dp, sy, Kind::Wall, wall_tag);
-        b.fill(W, 0.0, L, ny_in, dp, sy, Kind::Wall, wall_tag);
+        fill(-T, 0.0, L, ny_in, dp, sy);
+        fill(W, 0.0, L, ny_in, dp, sy);
     }
-    if (lid) b.fill(x_lo, H, nx_out, L, sx, dp, Kind::Wall, wall_tag, Vec2{{s.lid_velocity[0], s.lid_velocity[1]}});
+    if (lid) fill(x_lo, H, nx_out, L, sx, dp, Vec2{{s.lid_velocity[0], s.lid_velocity[1]}});
     for (const auto& o : s.obstacles)
-        b.fill(o.x0, o.y0, count_along(o.width, dp), count_along(o.height, dp), o.width / count_along(o.width, dp),
-               o.height / count_along(o.height, dp), Kind::Wall, wall_tag);
-    scene.n_wall = scene.particles.size() - scene.n_fluid;
-    scene.particles.resize(scene.particles.x.size());
+        fill(o.x0, o.y0, count_along(o.width, dp), count_along(o.height, dp), o.width / count_along(o.width, dp),
+             o.height / count_along(o.height, dp));
+}
 
+}  // namespace
+
+Scene2D build_scene(const FluidSettings& s) {
+    Scene2D scene;
+    // Counted first, then filled: every array is allocated once at its final size (grown by push_back, each
+    // would keep up to half again as much unused capacity for the whole run).
+    std::size_t n = 0;
+    lay_out(s, [&](const Vec2&, const Vec2&, Kind kind, int, double) {
+        ++n;
+        scene.n_fluid += kind == Kind::Fluid;
+    });
+    auto& P = scene.particles;
+    P.resize(n);
+    scene.column_top.resize(scene.n_fluid);
+    std::size_t i = 0;
+    lay_out(s, [&](const Vec2& x, const Vec2& v, Kind kind, int tag, double column_top) {
+        P.x[i] = x;
+        P.v[i] = v;
+        P.rho[i] = 0.0;
+        P.id[i] = static_cast<std::int32_t>(i);
+        P.tag[i] = tag;
+        P.kind[i] = kind;
+        if (kind == Kind::Fluid) scene.column_top[i] = column_top;
+        ++i;
+    });
+    scene.n_wall = n - scene.n_fluid;
+
+    const double dp = s.dp, W = s.tank_width, H = s.tank_height, T = s.wall_layers * dp;
+    const bool walls_x = !s.periodic[0], floor = !s.periodic[1], lid = s.closed_top && !s.periodic[1];
     scene.geometry = WallGeometry{W, H, T, walls_x, floor, lid, s.obstacles};
     // Grid region: the tank with its walls, plus head room above an open tank for splashes (particles
     // beyond it are still found, in the border cells).

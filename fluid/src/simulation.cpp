@@ -239,7 +239,7 @@ void Simulation2D::sort_particles() {
     grid_.build(st_.P.x, order_, [kind](std::size_t i) { return kind[i] == Kind::Escaped; });
     bool identity = true;
     for (std::size_t k = 0; k < order_.size() && identity; ++k) identity = order_[k] == k;
-    if (!identity) st_.P.reorder(order_, sort_scratch_);
+    if (!identity) st_.P.reorder(order_, scratch_);
 }
 
 Simulation2D::V Simulation2D::boundary_acceleration(std::uint32_t w) const {
@@ -257,17 +257,15 @@ void Simulation2D::evaluate() {
     const bool pcisph = s_.pressure == PressureModel::Pcisph;
     const bool dummy = s_.wall == WallModel::Dummy;
     const bool summation = s_.density != DensityMethod::Continuity;
-    pr2_.resize(n);
     with_kernels<Dim>(s_.kernel, h_, [&](const auto& kw, const auto& kg) {
         if (summation) {
+            // Written in place: a particle's sum reads no density but its own (a boundary particle keeps it).
+            const std::vector<double>* volumes = nullptr;
             if (s_.density == DensityMethod::Shepard) {
                 summation_density(P, grid_, kw, mass_, true, nullptr, rho_tmp_);  // plain sums: the volumes
-                summation_density(P, grid_, kw, mass_, dummy, &rho_tmp_, pr2_);   // pr2_ as scratch
-                std::swap(P.rho, pr2_);
-            } else {
-                summation_density(P, grid_, kw, mass_, dummy, nullptr, rho_tmp_);
-                std::swap(P.rho, rho_tmp_);
+                volumes = &rho_tmp_;
             }
+            summation_density(P, grid_, kw, mass_, dummy, volumes, P.rho);
         }
         if (kinematic_floor_) {
             // Only particles below rho(p = 0) can be raised: the kernel sum (all neighbours, boundaries
@@ -311,15 +309,24 @@ void Simulation2D::evaluate() {
                 for (long long q = 0; q < nn; ++q) P.p[static_cast<std::size_t>(q)] = 0.0;
             }
         }
-#pragma omp parallel for schedule(static)
-        for (long long q = 0; q < nn; ++q) {
-            const std::size_t i = static_cast<std::size_t>(q);
-            pr2_[i] = P.p[i] / (P.rho[i] * P.rho[i]);
-        }
-        compute_rates(P, grid_, kg, ViscosityKernel<Dim>(h_), pr2_, rates_);
+        compute_rates(P, grid_, kg, ViscosityKernel<Dim>(h_), fill_rate_factors(), rates_);
     });
     reduce_rates();
     st_.rates_fresh = true;
+}
+
+const RateFactors* Simulation2D::fill_rate_factors() {
+    const auto& P = st_.P;
+    const std::size_t n = P.size();
+    const long long nn = static_cast<long long>(n);
+    if (scratch_.size() < n * sizeof(RateFactors)) scratch_.resize(n * sizeof(RateFactors));
+    RateFactors* factors = reinterpret_cast<RateFactors*>(scratch_.data());
+#pragma omp parallel for schedule(static)
+    for (long long q = 0; q < nn; ++q) {
+        const std::size_t i = static_cast<std::size_t>(q);
+        factors[i] = RateFactors{P.p[i] / (P.rho[i] * P.rho[i]), 1.0 / P.rho[i]};
+    }
+    return factors;
 }
 
 double Simulation2D::boundary_density(double p) const {
@@ -383,7 +390,6 @@ void Simulation2D::refresh_solid_rates() {
         return;
     }
     if (s_.wall == WallModel::Dummy || s_.pressure == PressureModel::Pcisph) return;
-    const long long nn = static_cast<long long>(n);
     near_solid_.assign(n, 0);
     with_kernels<Dim>(s_.kernel, h_, [&](const auto& kw, const auto& kg) {
         extrapolate_boundary_state(P, grid_, kw, rates_.gravity, s_.clamp_negative,
@@ -404,14 +410,8 @@ void Simulation2D::refresh_solid_rates() {
                         if (P.kind[f] == Kind::Fluid && norm2(P.x[w] - (P.x[f] + ranges[r].shift)) < R2) near_solid_[f] = 1;
             }
         });
-        // All of them: pr2_ is scratch, not state (after RESTORE it holds another state's values).
-        pr2_.resize(n);
-#pragma omp parallel for schedule(static)
-        for (long long q = 0; q < nn; ++q) {
-            const std::size_t i = static_cast<std::size_t>(q);
-            pr2_[i] = P.p[i] / (P.rho[i] * P.rho[i]);
-        }
-        compute_rates(P, grid_, kg, ViscosityKernel<Dim>(h_), pr2_, rates_, near_solid_.data());
+        // The factors of all particles: the buffer is scratch (the sort reuses it), not state.
+        compute_rates(P, grid_, kg, ViscosityKernel<Dim>(h_), fill_rate_factors(), rates_, near_solid_.data());
     });
     reduce_rates();
 }
@@ -869,8 +869,9 @@ Simulation2D::Energy Simulation2D::mechanical_energy() const {
 }
 
 std::size_t Simulation2D::memory_bytes() const {
-    return st_.P.memory_bytes() + grid_.memory_bytes() + order_.capacity() * sizeof(std::uint32_t) +
-           sort_scratch_.capacity() + (pr2_.capacity() + rho_tmp_.capacity()) * sizeof(double) + pci_.memory_bytes();
+    return st_.P.memory_bytes() + (has_saved_ ? saved_.P.memory_bytes() : 0) + grid_.memory_bytes() +
+           order_.capacity() * sizeof(std::uint32_t) + scratch_.capacity() + rho_tmp_.capacity() * sizeof(double) +
+           pci_.memory_bytes();
 }
 
 void Simulation2D::save() {
@@ -879,7 +880,7 @@ void Simulation2D::save() {
 }
 
 void Simulation2D::restore() {
-    if (!has_saved_) throw SolverError("internal", "restore without a saved state");
+    if (!has_saved_) throw SolverError("bad_state", "RESTORE before any SAVE");
     st_ = saved_;
     sort_particles();  // the grid belongs to the state it was built for; the saved particles are already in cell order
 }

@@ -104,7 +104,8 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
             throw SolverError("bad_config", e.what());
         }
     }
-    save();
+    // No SAVE here: the saved copy is a second full particle state (about 100 bytes per particle), and only
+    // implicit coupling, which SAVEs at every window start, ever restores one.
     protocol::InitReply reply;
     reply.dt_wanted = sim_->stable_dt();
     Value::Table info;

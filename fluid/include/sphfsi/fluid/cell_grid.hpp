@@ -74,12 +74,13 @@ public:
             const auto k = static_cast<std::size_t>(i);
             cell_of_[k] = excluded(k) ? outside : cell_index(x[k]);
         }
-        start_.assign(ncells_ + 2, 0);
-        for (std::size_t i = 0; i < n; ++i) ++start_[cell_of_[i] + 1];
-        for (std::size_t c = 0; c <= ncells_; ++c) start_[c + 1] += start_[c];
-        fill_.assign(start_.begin(), start_.end() - 1);
+        // Counting sort with the counts one slot further up, so that start_[c + 1] is the insertion cursor of
+        // cell c and, once every point is placed, the end of c, i.e. the start of c + 1 (no cursor array).
+        start_.assign(ncells_ + 3, 0);
+        for (std::size_t i = 0; i < n; ++i) ++start_[cell_of_[i] + 2];
+        for (std::size_t c = 2; c < start_.size(); ++c) start_[c] += start_[c - 1];
         order.resize(n);
-        for (std::size_t i = 0; i < n; ++i) order[fill_[cell_of_[i]]++] = static_cast<std::uint32_t>(i);
+        for (std::size_t i = 0; i < n; ++i) order[start_[cell_of_[i] + 1]++] = static_cast<std::uint32_t>(i);
     }
     void build(const std::vector<Vec<Dim>>& x, std::vector<std::uint32_t>& order) {
         build(x, order, [](std::size_t) { return false; });
@@ -173,7 +174,7 @@ public:
     double period(int axis) const { return period_[axis]; }
     const Vec<Dim>& lo() const { return lo_; }
     std::size_t memory_bytes() const {
-        return (start_.capacity() + fill_.capacity() + cell_of_.capacity()) * sizeof(std::uint32_t);
+        return (start_.capacity() + cell_of_.capacity()) * sizeof(std::uint32_t);
     }
 
 private:
@@ -193,7 +194,7 @@ private:
     std::array<bool, Dim> periodic_{};
     std::size_t ncells_ = 0;
     double radius_ = 0.0;
-    std::vector<std::uint32_t> start_, fill_, cell_of_;
+    std::vector<std::uint32_t> start_, cell_of_;
 };
 
 }  // namespace sphfsi::fluid

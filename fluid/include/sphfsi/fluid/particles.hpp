@@ -59,7 +59,7 @@ struct ParticleStore {
     }
 
     std::size_t memory_bytes() const {
-        return x.capacity() * sizeof(V) * 5 + (x_start.capacity() + v_start.capacity()) * sizeof(V) +
+        return (x.capacity() + v.capacity() + a.capacity() + v_visc.capacity() + x_start.capacity() + v_start.capacity()) * sizeof(V) +
                (rho.capacity() + drho.capacity() + p.capacity() + rho_start.capacity()) * sizeof(double) +
                (id.capacity() + tag.capacity()) * sizeof(std::int32_t) + kind.capacity() + div_r.capacity() * sizeof(float);
     }

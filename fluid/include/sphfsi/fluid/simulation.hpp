@@ -104,6 +104,7 @@ private:
 
     void evaluate();
     void refresh_solid_rates();
+    const RateFactors* fill_rate_factors();  // into scratch_, for compute_rates
     double boundary_density(double p) const;
     void sort_particles();
     void move_solids(double t);
@@ -149,10 +150,11 @@ private:
     int threads_ = 1;
     double step_dt_ = 0.0;  // dt of the step in progress (failure messages)
 
-    // Scratch (not state).
+    // Scratch (not state). scratch_ is the staging area of the sort (reorder) and then holds the rate pass's
+    // per-particle factors: the two uses never overlap, so one buffer serves both.
     std::vector<std::uint32_t> order_;
-    std::vector<unsigned char> sort_scratch_;
-    std::vector<double> pr2_, rho_tmp_;
+    std::vector<unsigned char> scratch_;
+    std::vector<double> rho_tmp_;  // Shepard densities: the plain sums that give the volumes
     PcisphScratch<Dim> pci_;
     std::unique_ptr<std::ofstream> step_log_;
 };
