@@ -96,7 +96,7 @@ def main():
                 print(f"| dam break {m} | {t} | {n} | {s} | {wall:.3f} | {rate / 1e6:.2f} M | {lo / 1e6:.2f} - {hi / 1e6:.2f} M | {rss:.0f} |")
     if only in (None, "coupled"):
         # The participants' wait policy against sleeping at once (docs/benchmarks.md, "Coupled run").
-        for policy, spin_us in (("participants sleep at once", 0), ("participants' default wait policy", None)):
+        for policy, spin_us in (("participants sleep at once", 0), ("participants spin 1 ms after each reply (the default)", None)):
             wall, windows, share, share_max, cpu, cpu_max = coupled_row(bin_dir, repeats, spin_us)
             print(f"\nelastic gate, dp = 2 mm, 0.1 s, {windows} windows, {policy}: wall {wall:.2f} s; messaging and "
                   f"waiting {share:.2f} % of wall (max {share_max:.2f} %); coordinator CPU {cpu:.2f} % of one core "
