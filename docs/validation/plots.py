@@ -67,7 +67,7 @@ def added_mass():
         if r["method"] not in methods:
             methods.append(r["method"])
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.2))
-    markers = "osD^v"
+    markers = "osD^v<"
     for m, mk in zip(methods, markers):
         sel = sorted((r for r in rs if r["method"] == m), key=lambda r: num(r["structure.material.rho"]))
         ratio = [num(r["structure.material.rho"]) * 0.02 / (1000 * 0.2) for r in sel]
