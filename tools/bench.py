@@ -11,7 +11,8 @@ Workloads:
   coupled  the elastic gate (scenarios/elastic_gate.toml, dp = 2 mm, 0.1 s) through the coordinator, with
            the participants sleeping at once while they wait and with their default wait policy
 For each: particles, steps, wall seconds, particle-steps per second, peak resident memory per particle
-(the process's peak RSS from wait4, divided by its particle count), and for the coupled run the share of
+(the benchmark process's own peak resident set, VmHWM, divided by its particle count: wait4's ru_maxrss
+would carry this script's ~10 MiB across exec), and for the coupled run the share of
 wall time spent messaging and waiting, and the coordinator's own CPU use.
 """
 import os
@@ -25,9 +26,9 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def run_measured(argv, env=None):
-    """Runs argv to completion; returns its stdout and the rusage of that process alone (peak RSS)."""
+    """Runs argv to completion; returns its stdout and the rusage of that process."""
     p = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-    # Read the output fully, then reap with wait4 to get this child's own peak RSS.
+    # Read the output fully, then reap with wait4 (the exit status and rusage of this child alone).
     out = p.stdout.read()
     err = p.stderr.read()
     _, status, usage = os.wait4(p.pid, 0)
@@ -46,10 +47,10 @@ def fluid_rows(bin_dir, model, sizes, threads, steps, repeats):
                 out, usage = run_measured([os.path.join(bin_dir, "sphfsi-fluid-bench"), "--sizes", size, "--threads", str(t),
                                            "--models", model, "--steps", str(steps)])
                 line = [l for l in out.splitlines() if l.startswith(model)][0].split()
-                # model threads fluid particles steps iters wall_s rate bytes/part
+                # model threads fluid particles steps iters wall_s rate bytes/part peak_rss/part
                 last = line
                 rates.append(float(line[7]))
-                rss.append(usage.ru_maxrss * 1024 / int(line[3]))
+                rss.append(float(line[9]))  # the bench's own VmHWM per particle (wait4's carries Python's)
             rows.append((model, t, int(last[3]), int(last[4]), float(last[6]), statistics.median(rates), min(rates),
                          max(rates), statistics.median(rss)))
     return rows

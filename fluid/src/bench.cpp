@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -62,6 +63,16 @@ Value scene(double dp, const std::string& model, int threads) {
 
 double fluid_count_to_dp(double n) { return std::sqrt(0.1 * 0.2 / n); }
 
+// The process's own peak resident set (VmHWM), in bytes. Not getrusage's ru_maxrss: that carries the
+// launching process's resident set across fork and exec (a Python launcher adds about 10 MiB).
+double peak_resident_bytes() {
+    std::ifstream status("/proc/self/status");
+    std::string line;
+    while (std::getline(status, line))
+        if (line.rfind("VmHWM:", 0) == 0) return std::atof(line.c_str() + 6) * 1024.0;
+    return 0.0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -79,8 +90,8 @@ int main(int argc, char** argv) {
             return 2;
         }
     }
-    std::printf("%-9s %7s %9s %9s %7s %7s %9s %14s %10s\n", "model", "threads", "fluid", "particles", "steps", "iters",
-                "wall_s", "particle-steps/s", "bytes/part");
+    std::printf("%-9s %7s %9s %9s %7s %7s %9s %14s %10s %10s\n", "model", "threads", "fluid", "particles", "steps", "iters",
+                "wall_s", "particle-steps/s", "bytes/part", "peak_rss/part");
     for (const auto& size : sizes) {
         const double n = std::atof(size.c_str()) * (size.back() == 'k' ? 1e3 : size.back() == 'M' ? 1e6 : 1.0);
         const double dp = fluid_count_to_dp(n);
@@ -111,9 +122,9 @@ int main(int argc, char** argv) {
                 const int taken = advance_steps(steps, iters);
                 const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
                 const double np = static_cast<double>(sim.particles().size());
-                std::printf("%-9s %7s %9zu %9zu %7d %7u %9.3f %14.3e %10.0f\n", model.c_str(), th.c_str(), sim.fluid_count(),
-                            sim.particles().size(), taken, iters, wall, np * taken / wall,
-                            static_cast<double>(sim.memory_bytes()) / np);
+                std::printf("%-9s %7s %9zu %9zu %7d %7u %9.3f %14.3e %10.0f %10.0f\n", model.c_str(), th.c_str(),
+                            sim.fluid_count(), sim.particles().size(), taken, iters, wall, np * taken / wall,
+                            static_cast<double>(sim.memory_bytes()) / np, peak_resident_bytes() / np);
                 std::fflush(stdout);
             }
     }
