@@ -11,6 +11,7 @@
 #include "sphfsi/fluid/continuity.hpp"
 #include "sphfsi/fluid/density_summation.hpp"
 #include "sphfsi/fluid/kernel_dispatch.hpp"
+#include "sphfsi/fluid/lattice.hpp"
 #include "sphfsi/fluid/wall_boundary.hpp"
 #include "sphfsi/protocol/solver.hpp"
 
@@ -96,13 +97,8 @@ Simulation2D::Simulation2D(const FluidSettings& settings, Scene2D scene, double 
     if (kinematic_floor_) {
         kinematic_cap_ = s_.pressure == PressureModel::Wcsph ? tait_.density(0.0) : standard_.density(0.0);
         const double lattice_sum = with_kernels<Dim>(s_.kernel, h_, [&](const auto& kw, const auto&) {
-            const int n = static_cast<int>(std::ceil(support_ / s_.dp)) + 1;
-            double sum = 0.0;
-            for (int a = -n; a <= n; ++a)
-                for (int b = -n; b <= n; ++b) {
-                    const double r = std::hypot(a * s_.dp, b * s_.dp);
-                    if (r < support_) sum += kw.w(r);
-                }
+            double sum = kw.w(0.0);
+            for_each_lattice_neighbour<Dim>(s_.dp, support_, [&](const V&, double r) { sum += kw.w(r); });
             return mass_ * sum;
         });
         kinematic_norm_ = s_.rho0 / lattice_sum;

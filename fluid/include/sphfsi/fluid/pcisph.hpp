@@ -16,6 +16,7 @@
 #include <omp.h>
 
 #include "sphfsi/fluid/cell_grid.hpp"
+#include "sphfsi/fluid/lattice.hpp"
 #include "sphfsi/fluid/particles.hpp"
 
 namespace sphfsi::fluid {
@@ -46,23 +47,13 @@ struct PcisphOutcome {
 // Stiffness factor delta * dt^2 from a prototype fluid particle with a full lattice neighbourhood.
 template <int Dim, class KernelG>
 double pcisph_delta_dt2(const KernelG& kg, double dp, double mass, double rho0) {
-    const int n = static_cast<int>(std::ceil(kg.support() / dp)) + 1;
     double sum_grad2 = 0.0;
     Vec<Dim> sum_grad{};
-    int idx[3] = {-n, -n, -n};
-    while (true) {
-        Vec<Dim> dx{};
-        for (int k = 0; k < Dim; ++k) dx[k] = idx[k] * dp;
-        const double r2 = norm2(dx);
-        if (r2 > 0.0 && r2 < kg.support() * kg.support()) {
-            const Vec<Dim> g = dx * kg.grad_factor(std::sqrt(r2));
-            sum_grad += g;
-            sum_grad2 += norm2(g);
-        }
-        int k = 0;
-        while (k < Dim && ++idx[k] > n) idx[k++] = -n;
-        if (k == Dim) break;
-    }
+    for_each_lattice_neighbour<Dim>(dp, kg.support(), [&](const Vec<Dim>& dx, double r) {
+        const Vec<Dim> g = dx * kg.grad_factor(r);
+        sum_grad += g;
+        sum_grad2 += norm2(g);
+    });
     const double beta = 2.0 * mass * mass / (rho0 * rho0);  // times dt^2
     return -1.0 / (beta * (-norm2(sum_grad) - sum_grad2));
 }
