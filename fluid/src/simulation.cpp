@@ -450,10 +450,14 @@ double Simulation2D::stable_dt() {
     const double nu = (s_.viscosity == ViscosityModel::Morris || s_.viscosity == ViscosityModel::Mueller) ? s_.nu : 0.0;
     StableStep ss = stable_step(limits_, h_, c, st_.u_max, a, nu);
     // PCISPH has no sound speed in its CFL condition, so at cfl near 1 a particle would move about h per
-    // step, beyond the reach of the neighbour lists its prediction uses (step_pcisph); keep it within a
-    // quarter of the support. (WCSPH and standard SPH steps are bounded far below that by c.)
-    if (s_.pressure == PressureModel::Pcisph && st_.u_max > 0.0 && 0.2 * support_ / st_.u_max < ss.dt)
-        ss = {0.2 * support_ / st_.u_max, "PCISPH neighbour reach"};
+    // step, beyond the reach of the neighbour lists its prediction uses (step_pcisph). The step aims at
+    // pcisph_step_reach of the support, under the pcisph_reach that step_pcisph accepts: the margin is for
+    // the part of the motion the step's acceleration adds. (WCSPH and standard SPH steps are bounded far
+    // below that by c.)
+    if (s_.pressure == PressureModel::Pcisph && st_.u_max > 0.0) {
+        const double reach_dt = pcisph_step_reach * support_ / st_.u_max;
+        if (reach_dt < ss.dt) ss = {reach_dt, "PCISPH neighbour reach"};
+    }
     if (!(ss.dt >= s_.dt_min)) {
         step_dt_ = ss.dt;
         throw SolverError("diverged", "step " + std::to_string(st_.step + 1) + ", t = " + fmt(st_.t) +
@@ -630,8 +634,8 @@ double Simulation2D::step_pcisph(double dt, bool adaptive, WindowStats& ws) {
         // an impact), its predicted density comes out low and it is driven into the wall: the failure mode
         // the PCISPH stability sweep found at cfl = 1 (docs/validation.md). Such a step is halved like one
         // that did not converge.
-        const bool within_reach = out.converged && max_predicted_displacement() <= 0.25 * support_;
-        if (within_reach) {
+        const double moved = out.converged ? max_predicted_displacement() : 0.0;
+        if (out.converged && moved <= pcisph_reach * support_) {
             ws.iterations += static_cast<std::uint64_t>(out.iterations);
             ws.max_iterations = std::max(ws.max_iterations, out.iterations);
             ws.max_density_error = std::max(ws.max_density_error, out.max_density_error);
@@ -639,10 +643,10 @@ double Simulation2D::step_pcisph(double dt, bool adaptive, WindowStats& ws) {
         }
         if (!adaptive && out.converged)
             throw SolverError("not_converged", "step " + std::to_string(st_.step + 1) + ", t = " + fmt(st_.t) +
-                                                   " s: PCISPH predicts a particle moving " +
-                                                   fmt(max_predicted_displacement()) + " m in the fixed step " +
-                                                   fmt(dt) + " s, beyond a quarter of the kernel support (" +
-                                                   fmt(0.25 * support_) + " m) that its neighbour lists reach");
+                                                   " s: PCISPH predicts a particle moving " + fmt(moved) +
+                                                   " m in the fixed step " + fmt(dt) + " s, beyond the " +
+                                                   fmt(pcisph_reach * support_) + " m (" + fmt(pcisph_reach) +
+                                                   " of the kernel support) that its neighbour lists reach");
         if (!adaptive)
             throw SolverError("not_converged", "step " + std::to_string(st_.step + 1) + ", t = " + fmt(st_.t) +
                                                    " s: PCISPH density error " + fmt(out.max_density_error) +

@@ -117,6 +117,9 @@ private:
     void step_predictor_corrector(double dt);
     double step_pcisph(double dt, bool adaptive, WindowStats& ws);
     double max_predicted_displacement() const;  // of the PCISPH prediction in pci_, fluid particles
+    // The largest PCISPH prediction accepted, and the one the step size aims at, as fractions of the kernel
+    // support: beyond pcisph_reach a particle misses neighbours its neighbour lists do not hold.
+    static constexpr double pcisph_reach = 0.25, pcisph_step_reach = 0.2;
     void accumulate_solid_forces(double weight);
     void wrap_periodic();
     double check_state();
