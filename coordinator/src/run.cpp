@@ -80,7 +80,7 @@ private:
     WindowOutcome advance_alone(const WindowPlan& plan);
     WindowPlan plan_window(double t_stop) const;
     void record_window(const WindowPlan& plan, const WindowOutcome& o, double wall_s, const InterfaceWork& work);
-    void check_interface_energy(const WindowOutcome& o, const InterfaceWork& work);
+    void account_interface_energy(const WindowOutcome& o, const InterfaceWork& work);
     void snapshot_all();
     void checkpoint();
 
@@ -313,7 +313,7 @@ void Runner::loop() {
         if (coupled_)
             work = interface_work(iface_.force, structure_start, iface_.displacement, fluid_start, iface_.fluid_displacement);
         record_window(plan, o, wall, work);
-        if (coupled_) check_interface_energy(o, work);
+        if (coupled_) account_interface_energy(o, work);
         if (watchpoints_) watchpoints_->write(t_, iface_.displacement);
         progress_->update(t_, steps_);
         if (t_ >= output_index_ * output_dt_ - eps) snapshot_all();
@@ -325,9 +325,11 @@ void Runner::loop() {
 // structure: the added mass). The fluid and the structure each stay within their own bounds while the pair
 // blows up, so neither participant sees it; the interface energy balance does. The yardstick is the fluid's
 // mechanical energy (kinetic plus potential above the tank floor, from its stats) after the first window:
-// energy a coupling created beyond what the whole fluid had is not physics. Checked after the window is
+// energy a coupling created beyond what the whole fluid had is not physics. Accounted after the window is
 // recorded, so the record holds the window that tripped it.
-void Runner::check_interface_energy(const WindowOutcome& o, const InterfaceWork& work) {
+void Runner::account_interface_energy(const WindowOutcome& o, const InterfaceWork& work) {
+    iface_.work_total += work.on_structure;
+    iface_.created_total += work.created;
     if (!(iface_.fluid_energy > 0.0) && o.fluid.reply.stats.is_table()) {
         const auto& st = o.fluid.reply.stats;
         const Value *k = st.find("kinetic_energy"), *p = st.find("potential_energy");
@@ -374,8 +376,6 @@ void Runner::record_window(const WindowPlan& p, const WindowOutcome& o, double w
         {"wall_s", wall_s},
     };
     if (coupled_) {
-        iface_.work_total += work.on_structure;
-        iface_.created_total += work.created;
         row.emplace_back("interface_work", work.on_structure);
         row.emplace_back("interface_energy_created", work.created);
     }
