@@ -16,15 +16,22 @@ inline Value with(Value base, const std::vector<std::pair<std::string, Value>>& 
     return base;
 }
 
-inline Value block(double x0, double y0, double w, double h, int tag = 0, const char* split = "none") {
+// An axis-aligned box [x0, x0 + w] x [y0, y0 + h]: an [[obstacle]] as it stands.
+inline Value box(double x0, double y0, double w, double h) {
     Value::Table t;
     t["x0"] = x0;
     t["y0"] = y0;
     t["width"] = w;
     t["height"] = h;
-    t["tag"] = tag;
-    t["split"] = split;
     return Value(std::move(t));
+}
+
+// A [[water]] block: a box with its dye tag and how the dye splits it.
+inline Value block(double x0, double y0, double w, double h, int tag = 0, const char* split = "none") {
+    Value b = box(x0, y0, w, h);
+    b.as_table_mut()["tag"] = tag;
+    b.as_table_mut()["split"] = split;
+    return b;
 }
 
 inline Value vec2(double a, double b) { return Value(Value::Array{Value(a), Value(b)}); }

@@ -76,12 +76,7 @@ TEST_SUITE("scene") {
         const std::string log = "fluid_test_step_log.csv";
         std::remove(log.c_str());
         Value f = wcsph(dam_break(0.1 / 20));
-        Value::Table box;
-        box["x0"] = 0.3;
-        box["y0"] = 0.0;
-        box["width"] = 0.04;
-        box["height"] = 0.05;
-        f.as_table_mut()["obstacle"] = Value(Value::Array{Value(std::move(box))});
+        f.as_table_mut()["obstacle"] = Value(Value::Array{box(0.3, 0.0, 0.04, 0.05)});
         f = with(f, {{"step_log", log}});
         auto s = start(f);
         std::size_t crossings = 0, steps = 0;
@@ -118,12 +113,7 @@ TEST_SUITE("scene") {
         f.make_table();
         f = with(f, {{"dp", 0.004}, {"tank.width", 0.584}, {"tank.height", 0.584}});
         f.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, 0.146, 0.292)});
-        Value::Table box;
-        box["x0"] = 0.286;
-        box["y0"] = 0.0;
-        box["width"] = 0.012;
-        box["height"] = 0.08;
-        f.as_table_mut()["obstacle"] = Value(Value::Array{Value(std::move(box))});
+        f.as_table_mut()["obstacle"] = Value(Value::Array{box(0.286, 0.0, 0.012, 0.08)});
         f.as_table_mut()["boundary"] = Value(Value::Table{{"repulsive", Value(true)}});  // as the scene sets it
         auto s = start(f);
         const auto& sim = s->simulation();
