@@ -88,11 +88,13 @@ Simulation2D::Simulation2D(const FluidSettings& settings, Scene2D scene, double 
     // zero). With negative pressures clamped, rarefied fluid feels no restoring force, and through violent
     // splashes the first-order integration loses that tracking: in elastic_obstacle.toml at dp = 2 mm the
     // returning wave flows at 0.4 to 0.9 rho0 with full neighbourhoods, and a particle thrown off the
-    // cantilever then fell to 0.009 rho0 ("diverged" at t = 0.65 s). So before each evaluation the density is
+    // cantilever then fell to 0.009 rho0 ("diverged" at t = 0.65 s). So at each evaluation the density is
     // raised to the kinematic density (the kernel sum normalised by its value on the initial lattice), but
     // never above rho(p = 0): a particle can be as rarefied as its positions say, not more. This cannot create
     // pressure (compressed states are untouched) and leaves free-surface particles alone (their kernel sum is
     // truncated, below their density); a lone particle keeps at least m W(0), about a quarter of rho0.
+    // The rate pass takes the kernel sums and the density is raised after it (interaction.hpp: below
+    // rho(p = 0) the pressure is zero either way, so the pass sees the pressures a prior raise would give).
     kinematic_floor_ = continuity_ && s_.clamp_negative && s_.pressure != PressureModel::Pcisph;
     if (kinematic_floor_) {
         kinematic_cap_ = s_.pressure == PressureModel::Wcsph ? tait_.density(0.0) : standard_.density(0.0);
@@ -107,7 +109,6 @@ Simulation2D::Simulation2D(const FluidSettings& settings, Scene2D scene, double 
     rates_.wall_continuity = rates_.continuity && s_.wall == WallModel::Dummy;
     rates_.diffusion.model = s_.diffusion;
     rates_.diffusion.coef = s_.delta * h_ * c0_;
-    rates_.diffusion.eta2 = eta2;
     if (s_.diffusion == DensityDiffusion::Fourtakas)
         rates_.diffusion.hydro = V{{s_.rho0 * s_.gravity[0] / (c0_ * c0_), s_.rho0 * s_.gravity[1] / (c0_ * c0_)}};
     // Monaghan's (1994) wall force (boundary.repulsive). Pressure alone does not keep spray out of a wall: the
@@ -258,30 +259,10 @@ void Simulation2D::evaluate() {
             // Written in place: a particle's sum reads no density but its own (a boundary particle keeps it).
             const std::vector<double>* volumes = nullptr;
             if (s_.density == DensityMethod::Shepard) {
-                summation_density(P, grid_, kw, mass_, true, nullptr, rho_tmp_);  // plain sums: the volumes
-                volumes = &rho_tmp_;
+                summation_density(P, grid_, kw, mass_, true, nullptr, rho_scratch_);  // plain sums: the volumes
+                volumes = &rho_scratch_;
             }
             summation_density(P, grid_, kw, mass_, dummy, volumes, P.rho);
-        }
-        if (kinematic_floor_) {
-            // Only particles below rho(p = 0) can be raised: the kernel sum (all neighbours, boundaries
-            // included, self too) is taken for those alone.
-            const double R2 = grid_.radius2(), scale = mass_ * kinematic_norm_, w0 = kw.w(0.0);
-            grid_.for_each_cell_parallel([&](std::uint32_t cell, std::uint32_t begin, std::uint32_t end) {
-                typename CellGrid<Dim>::Range ranges[CellGrid<Dim>::max_ranges];
-                int nr = -1;
-                for (std::uint32_t i = begin; i < end; ++i) {
-                    if (P.kind[i] != Kind::Fluid || !(P.rho[i] < kinematic_cap_)) continue;
-                    if (nr < 0) nr = grid_.ranges(cell, ranges);
-                    double sum = w0;
-                    for (int r = 0; r < nr; ++r)
-                        for (std::uint32_t j = ranges[r].begin; j < ranges[r].end; ++j) {
-                            const double r2 = norm2(P.x[i] - (P.x[j] + ranges[r].shift));
-                            if (r2 < R2 && j != i) sum += kw.w(std::sqrt(r2));
-                        }
-                    P.rho[i] = std::max(P.rho[i], std::min(kinematic_cap_, sum * scale));
-                }
-            });
         }
         // Pressures of fluid particles and (dummy model) boundary particles from the equation of state.
         const bool tait = s_.pressure == PressureModel::Wcsph;
@@ -305,7 +286,20 @@ void Simulation2D::evaluate() {
                 for (long long q = 0; q < nn; ++q) P.p[static_cast<std::size_t>(q)] = 0.0;
             }
         }
-        compute_rates(P, grid_, kg, ViscosityKernel<Dim>(h_), fill_rate_factors(), rates_);
+        KinematicFloor floor;
+        if (kinematic_floor_) {
+            rho_scratch_.resize(n);
+            floor = KinematicFloor{kinematic_cap_, mass_ * kinematic_norm_, rho_scratch_.data()};
+        }
+        compute_rates(P, grid_, kw, kg, ViscosityKernel<Dim>(h_), fill_rate_factors(), rates_,
+                      kinematic_floor_ ? &floor : nullptr);
+        if (kinematic_floor_) {
+#pragma omp parallel for schedule(static)
+            for (long long q = 0; q < nn; ++q) {
+                const std::size_t i = static_cast<std::size_t>(q);
+                P.rho[i] = std::max(P.rho[i], rho_scratch_[i]);
+            }
+        }
     });
     reduce_rates();
     st_.rates_fresh = true;
@@ -407,7 +401,8 @@ void Simulation2D::refresh_solid_rates() {
             }
         });
         // The factors of all particles: the buffer is scratch (the sort reuses it), not state.
-        compute_rates(P, grid_, kg, ViscosityKernel<Dim>(h_), fill_rate_factors(), rates_, near_solid_.data());
+        compute_rates(P, grid_, kw, kg, ViscosityKernel<Dim>(h_), fill_rate_factors(), rates_, nullptr,
+                      near_solid_.data());
     });
     reduce_rates();
 }
@@ -488,8 +483,13 @@ std::vector<Simulation2D::V> Simulation2D::mean_solid_forces() const {
 }
 
 void Simulation2D::density_rates() {
+    const auto& P = st_.P;
+    const long long n = static_cast<long long>(P.size());
+    rho_scratch_.resize(P.size());
+#pragma omp parallel for schedule(static)
+    for (long long q = 0; q < n; ++q) rho_scratch_[static_cast<std::size_t>(q)] = 1.0 / P.rho[static_cast<std::size_t>(q)];
     with_kernels<Dim>(s_.kernel, h_, [&](const auto&, const auto& kg) {
-        continuity_rates(st_.P, grid_, kg, mass_, s_.wall == WallModel::Dummy, rates_.diffusion);
+        continuity_rates(st_.P, grid_, kg, mass_, s_.wall == WallModel::Dummy, rates_.diffusion, rho_scratch_.data());
     });
 }
 
@@ -870,7 +870,7 @@ Simulation2D::Energy Simulation2D::mechanical_energy() const {
 
 std::size_t Simulation2D::memory_bytes() const {
     return st_.P.memory_bytes() + (has_saved_ ? saved_.P.memory_bytes() : 0) + grid_.memory_bytes() +
-           order_.capacity() * sizeof(std::uint32_t) + scratch_.capacity() + rho_tmp_.capacity() * sizeof(double) +
+           order_.capacity() * sizeof(std::uint32_t) + scratch_.capacity() + rho_scratch_.capacity() * sizeof(double) +
            pci_.memory_bytes();
 }
 

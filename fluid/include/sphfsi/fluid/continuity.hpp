@@ -8,6 +8,8 @@
 // rho <-> v) amplifies every sound wave by sqrt(1 + (omega dt)^2) per step and the fluid rings itself to
 // pieces within a few hundred steps; with rho treated as a position-like variable (updated after the
 // velocity kick, from the kicked velocities) the scheme is symplectic and stable up to the CFL limit.
+//
+// `inv_rho`: 1/rho of every particle, computed once per pass by the caller rather than once per pair.
 #include <cmath>
 #include <cstdint>
 
@@ -19,10 +21,11 @@ namespace sphfsi::fluid {
 
 template <int Dim, class KernelG>
 void continuity_rates(ParticleStore<Dim>& P, const CellGrid<Dim>& grid, const KernelG& kg, double mass,
-                      bool boundaries_too, const DiffusionParams<Dim>& diffusion) {
+                      bool boundaries_too, const DiffusionParams<Dim>& diffusion, const double* inv_rho) {
     using V = Vec<Dim>;
     const double R2 = grid.radius2();
     const bool diffuse = diffusion.model != DensityDiffusion::None;
+    const DiffusionParams<Dim> dp = diffusion;  // a local copy: the compiler may keep it in registers
     grid.for_each_cell_parallel([&](std::uint32_t cell, std::uint32_t begin, std::uint32_t end) {
         typename CellGrid<Dim>::Range ranges[CellGrid<Dim>::max_ranges];
         const int nr = grid.ranges(cell, ranges);
@@ -44,7 +47,7 @@ void continuity_rates(ParticleStore<Dim>& P, const CellGrid<Dim>& grid, const Ke
                     if (r2 >= R2 || r2 == 0.0) continue;
                     const double F = kg.grad_factor(std::sqrt(r2));
                     drho += dot(vi - P.v[j], dx) * F;
-                    if (diffuse && fluid && fluid_j) diff += density_diffusion(diffusion, rho_i, P.rho[j], dx, F, r2);
+                    if (diffuse && fluid && fluid_j) diff += density_diffusion(dp, rho_i, P.rho[j], inv_rho[j], dx, F);
                 }
             P.drho[i] = mass * (drho + diff);
         }

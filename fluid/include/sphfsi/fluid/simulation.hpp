@@ -157,7 +157,10 @@ private:
     // per-particle factors: the two uses never overlap, so one buffer serves both.
     std::vector<std::uint32_t> order_;
     std::vector<unsigned char> scratch_;
-    std::vector<double> rho_tmp_;  // Shepard densities: the plain sums that give the volumes
+    // One value per particle for one pass at a time: the plain sums that give Shepard's volumes, the
+    // kinematic floor's densities from the rate pass, 1/rho for the continuity pass (a division per
+    // particle instead of one per pair).
+    std::vector<double> rho_scratch_;
     PcisphScratch<Dim> pci_;
     std::unique_ptr<std::ofstream> step_log_;
 };
