@@ -49,13 +49,14 @@ void write_checkpoint(const std::filesystem::path& file, const Checkpoint& c) {
     pack_array(pk, c.interface.displacement);
     pack_array(pk, c.interface.velocity);
     pack_array(pk, c.interface.previous_displacement);
-    pk.pack_array(6);
+    pk.pack_array(7);
     pack_array(pk, c.interface.force);
     pk.f64(c.interface.previous_dt);
     pack_array(pk, c.interface.fluid_displacement);
     pk.f64(c.interface.work_total);
     pk.f64(c.interface.created_total);
     pk.f64(c.interface.fluid_energy);
+    pk.f64(c.interface.total_energy);
     pk.pack_map(static_cast<std::uint32_t>(c.states.size()));
     for (const auto& [role, bytes] : c.states) {
         pk.pack(role);
@@ -112,6 +113,7 @@ Checkpoint read_checkpoint(const std::filesystem::path& file) {
             c.interface.created_total = coupling.ptr[4].as<double>();
             c.interface.fluid_energy = coupling.ptr[5].as<double>();
         }
+        if (coupling.size > 6) c.interface.total_energy = coupling.ptr[6].as<double>();  // else from the next window
         const auto& m = a.ptr[13].via.map;
         for (std::uint32_t k = 0; k < m.size; ++k) {
             const auto& bin = m.ptr[k].val.via.bin;

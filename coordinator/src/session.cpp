@@ -37,7 +37,7 @@ void InterfaceState::reset(const InterfaceMesh& m) {
     const auto n = m.vertices.rows();
     displacement = velocity = previous_displacement = force = fluid_displacement = F64Array::zeros(n, 2);
     previous_dt = 0.0;
-    work_total = created_total = fluid_energy = 0.0;
+    work_total = created_total = fluid_energy = total_energy = 0.0;
 }
 
 const F64Array& vertex_field(const std::string& role, const Fields& fields, const std::string& name, std::size_t vertices) {

@@ -41,9 +41,10 @@ struct InterfaceState {
     // Where the fluid last moved the interface to (the predicted or iterated window-end displacement it was
     // given): the other side of the interface energy balance (docs/coupling.md).
     protocol::F64Array fluid_displacement;
-    // The balance since t0: work done on the structure and energy created at the interface [J/m], and the
-    // yardstick for the latter: the fluid's mechanical energy after the first window (0: not known yet).
-    double work_total = 0.0, created_total = 0.0, fluid_energy = 0.0;
+    // The balance since t0: work done on the structure and energy created at the interface [J/m], the
+    // yardstick for the energy checks: the fluid's mechanical energy after the first window, and the fluid's
+    // plus the structure's after the first window (0: not known yet). energy_guard.hpp uses them.
+    double work_total = 0.0, created_total = 0.0, fluid_energy = 0.0, total_energy = 0.0;
     double previous_dt = 0.0;
 
     void reset(const protocol::InterfaceMesh& m);

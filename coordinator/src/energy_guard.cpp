@@ -1,0 +1,64 @@
+#include "sphfsi/coordinator/energy_guard.hpp"
+
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+
+namespace sphfsi::coordinator {
+namespace {
+
+// The sum of two numbers a participant reports in its stats, if it reports both.
+std::optional<double> stats_sum(const protocol::AdvanceReply& r, const char* a, const char* b) {
+    if (!r.stats.is_table()) return std::nullopt;
+    const Value *x = r.stats.find(a), *y = r.stats.find(b);
+    if (!x || !y || !x->is_number() || !y->is_number()) return std::nullopt;
+    return x->as_double() + y->as_double();
+}
+
+[[noreturn]] void diverged(std::uint64_t window, double t, const std::string& what) {
+    std::ostringstream s;
+    s << "coupling diverged: window " << window << ", t = " << t << " s: " << what;
+    throw std::runtime_error(s.str());
+}
+
+}  // namespace
+
+void account_energy(const EnergyLimits& limits, std::uint64_t window, double t, const WindowOutcome& o,
+                    const InterfaceWork& work, InterfaceState& s) {
+    s.work_total += work.on_structure;
+    s.created_total += work.created;
+    const auto fluid = stats_sum(o.fluid.reply, "kinetic_energy", "potential_energy");
+    const auto structure = stats_sum(o.structure.reply, "kinetic_energy", "strain_energy");
+    if (!(s.fluid_energy > 0.0) && fluid) s.fluid_energy = *fluid;  // the yardstick, from the first window
+    if (!(s.fluid_energy > 0.0)) return;
+    if (!(s.total_energy > 0.0) && fluid && structure) s.total_energy = *fluid + *structure;
+
+    const double created_limit = limits.max_created * s.fluid_energy;
+    if (created_limit > 0.0 && s.created_total > created_limit) {
+        const std::size_t v = work.most_created_at;
+        std::ostringstream m;
+        m << "the interface has created " << s.created_total << " J/m of energy, more than "
+          << "coupling.max_created_energy = " << limits.max_created << " times the fluid's mechanical energy ("
+          << s.fluid_energy << " J/m); in this window most at interface vertex " << v << " ("
+          << s.mesh.vertices.values[2 * v] << ", " << s.mesh.vertices.values[2 * v + 1] << ") m. An explicit "
+          << "scheme does this when the structure is light for the fluid on it (added mass): an implicit scheme "
+          << "(coupling.scheme) or smaller windows may hold";
+        diverged(window, t, m.str());
+    }
+
+    const double gain_limit = limits.max_gain * s.fluid_energy;
+    if (limits.external_work || !(gain_limit > 0.0) || !(s.total_energy > 0.0) || !fluid || !structure) return;
+    const double gain = *fluid + *structure - s.total_energy;
+    if (gain > gain_limit) {
+        std::ostringstream m;
+        m << "the fluid and the structure hold " << gain << " J/m more mechanical energy than after the first "
+          << "window (now fluid " << *fluid << ", structure " << *structure << " J/m), more than "
+          << "coupling.max_energy_gain = " << limits.max_gain << " times the fluid's mechanical energy ("
+          << s.fluid_energy << " J/m); with no external work they can only lose energy. An explicit scheme "
+          << "does this under a light structure (added mass), also through the wall velocity when it has no "
+          << "predictor (coupling.predictor): an implicit scheme (coupling.scheme) may hold";
+        diverged(window, t, m.str());
+    }
+}
+
+}  // namespace sphfsi::coordinator
