@@ -225,9 +225,9 @@ void Runner::initialise(std::optional<Checkpoint>& resume) {
         watchpoints_ = std::make_unique<Watchpoints>(opt_.out_dir / "watchpoints.csv", scene_.tree, iface_.mesh,
                                                      resume.has_value(), t0_);
     if (coupled_) {
-        schedule_ = std::make_unique<Schedule>(scene_.section("coupling"));
-        scheme_ = make_scheme(scene_.section("coupling"), *session_, [this](const std::string& s) { log(s); });
         const Value& c = scene_.section("coupling");
+        schedule_ = std::make_unique<Schedule>(c);
+        scheme_ = make_scheme(c, *session_, [this](const std::string& s) { log(s); });
         energy_limits_.max_created = c.at("max_created_energy").as_double();
         energy_limits_.max_gain = c.at("max_energy_gain").as_double();
         energy_limits_.external_work = fluid_does_external_work();
@@ -332,6 +332,7 @@ void Runner::loop() {
         if (coupled_)
             work = interface_work(iface_.force, structure_start, iface_.displacement, fluid_start, iface_.fluid_displacement);
         record_window(plan, o, wall, work);
+        // After the window is recorded, so a run stopped by the energy checks keeps the window that tripped them.
         if (coupled_) account_energy(energy_limits_, windows_, t_, o, work, iface_);
         if (watchpoints_) watchpoints_->write(t_, iface_.displacement);
         progress_->update(t_, steps_);

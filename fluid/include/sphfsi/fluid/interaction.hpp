@@ -56,8 +56,10 @@ inline Vec<Dim> repulsive_acceleration(double d, double r0, const Vec<Dim>& dx, 
 // The kinematic density floor's kernel sums (simulation.cpp explains the floor), taken in this pass for the
 // fluid particles below `cap` = rho(p = 0): out[i] = min(cap, scale sum_j W_ij), self included, and 0 for
 // every other particle. Below cap a particle's pressure is clamped to zero, so raising its density to
-// out[i] after the pass changes none of the pressures the pass used; it saves a neighbour sweep of its own
-// (8 % of a WCSPH step, docs/benchmarks.md, "Profile").
+// out[i] after the pass changes none of the fluid pressures the pass used (only, for these rarefied
+// particles, their 1/rho in the viscous and free-surface terms and their density in the Adami wall
+// extrapolation's hydrostatic term); it saves a neighbour sweep of its own (8 % of a WCSPH step,
+// docs/benchmarks.md, "Profile").
 struct KinematicFloor {
     double cap = 0.0, scale = 0.0;
     double* out = nullptr;
