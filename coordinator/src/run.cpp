@@ -103,6 +103,10 @@ private:
     double fluid_dt_ = 0.0, structure_dt_ = 0.0;
     std::uint64_t output_index_ = 0, checkpoint_index_ = 0, windows_ = 0, steps_ = 0;
     double messaging_total_s_ = 0.0, wall_in_loop_s_ = 0.0;
+    // The time loop as a whole (windows, recording, snapshots, checkpoints), for the coordinator's CPU share
+    // measured over the same interval as its wall time; start-up and shut-down are not in it.
+    std::optional<Clock::time_point> loop_start_;
+    double loop_cpu_start_ = 0.0;
     EnergyLimits energy_limits_;
 };
 
@@ -162,6 +166,8 @@ int Runner::execute() {
         status = std::string("failed: ") + e.what();
         code = 1;
     }
+    const double loop_cpu = loop_start_ ? cpu_seconds() - loop_cpu_start_ : 0.0;
+    const double loop_wall = loop_start_ ? std::chrono::duration<double>(Clock::now() - *loop_start_).count() : 0.0;
     progress_finish();
     if (hub_) hub_->goodbye(code == 0 ? 5.0 : 1.0);
     if (launcher_) launcher_->stop_all(code == 0 ? 2.0 : 0.5);
@@ -169,6 +175,8 @@ int Runner::execute() {
     recorder_->set_number("coordinator_cpu_s", cpu);
     recorder_->set_number("wall_s", wall_in_loop_s_);
     recorder_->set_number("messaging_and_waiting_s", messaging_total_s_);
+    recorder_->set_number("loop_wall_s", loop_wall);
+    recorder_->set_number("coordinator_loop_cpu_s", loop_cpu);
     if (coupled_) {
         recorder_->set_number("interface_work", iface_.work_total);
         recorder_->set_number("interface_energy_created", iface_.created_total);
@@ -311,6 +319,8 @@ WindowOutcome Runner::advance_alone(const WindowPlan& p) {
 }
 
 void Runner::loop() {
+    loop_start_ = Clock::now();
+    loop_cpu_start_ = cpu_seconds();
     const double eps = 1e-12 * std::max(1.0, end_);
     while (t_ < end_ - eps) {
         // Windows land exactly on output and checkpoint times, and on the end. Frame k is due at
