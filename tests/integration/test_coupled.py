@@ -60,6 +60,12 @@ def test_coupled_scenes_run_end_to_end():
             n = f["interface/vertices"].shape[0]
             assert f["interface/force"].shape[1:] == (n, 2)
             assert f["frames/fluid/position"].shape[0] == f["frames/structure/displacement"].shape[0]
+            # The run's cost figures (docs/record.md): the time loop holds every window, and the coordinator's
+            # CPU time in it is part of the process's.
+            a = f.attrs
+            assert a["loop_wall_s"] >= a["wall_s"] > 0, (a["loop_wall_s"], a["wall_s"])
+            assert 0 < a["coordinator_loop_cpu_s"] <= a["coordinator_cpu_s"]
+            assert 0 <= a["messaging_and_waiting_s"] <= a["wall_s"]
 
 
 def shared_sections(path):
