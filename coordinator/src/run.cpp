@@ -261,16 +261,14 @@ void Runner::initialise(std::optional<Checkpoint>& resume) {
 // Wind on the free surface or a sliding lid does work on the fluid, so the pair's energy may rise: the energy
 // guard's total check is off for such scenes.
 bool Runner::fluid_does_external_work() const {
-    auto nonzero = [&](std::initializer_list<const char*> path) {
-        const Value* v = &scene_.tree;
-        for (const char* k : path)
-            if (!v->is_table() || !(v = v->find(k))) return false;
-        if (!v->is_array()) return false;
+    auto nonzero = [&](std::string_view path) {
+        const Value* v = find_path(scene_.tree, path);
+        if (!v || !v->is_array()) return false;
         for (const auto& x : v->as_array())
             if (x.is_number() && x.as_double() != 0.0) return true;
         return false;
     };
-    return nonzero({"fluid", "free_surface", "wind_shear"}) || nonzero({"fluid", "tank", "lid_velocity"});
+    return nonzero("fluid.free_surface.wind_shear") || nonzero("fluid.tank.lid_velocity");
 }
 
 WindowPlan Runner::plan_window(double t_stop) const {
