@@ -25,7 +25,7 @@ void continuity_rates(ParticleStore<Dim>& P, const CellGrid<Dim>& grid, const Ke
     using V = Vec<Dim>;
     const double R2 = grid.radius2();
     const bool diffuse = diffusion.model != DensityDiffusion::None;
-    const DiffusionParams<Dim> dp = diffusion;  // a local copy: the compiler may keep it in registers
+    const DiffusionParams<Dim> diff_params = diffusion;  // a local copy: the compiler may keep it in registers
     grid.for_each_cell_parallel([&](std::uint32_t cell, std::uint32_t begin, std::uint32_t end) {
         typename CellGrid<Dim>::Range ranges[CellGrid<Dim>::max_ranges];
         const int nr = grid.ranges(cell, ranges);
@@ -47,7 +47,8 @@ void continuity_rates(ParticleStore<Dim>& P, const CellGrid<Dim>& grid, const Ke
                     if (r2 >= R2 || r2 == 0.0) continue;
                     const double F = kg.grad_factor(std::sqrt(r2));
                     drho += dot(vi - P.v[j], dx) * F;
-                    if (diffuse && fluid && fluid_j) diff += density_diffusion(dp, rho_i, P.rho[j], inv_rho[j], dx, F);
+                    if (diffuse && fluid && fluid_j)
+                        diff += density_diffusion(diff_params, rho_i, P.rho[j], inv_rho[j], dx, F);
                 }
             P.drho[i] = mass * (drho + diff);
         }

@@ -20,7 +20,7 @@ struct DiffusionParams {
 // Contribution to drho_i/dt divided by m_j, with F = W'(r)/r of the gradient kernel and 1/rho_j.
 // The published term divides x_ij . grad W_ij by r^2 + eta^2, eta^2 = 0.01 h^2, to keep it finite for close
 // pairs. Here x_ij . grad W_ij = F r^2, so the quotient is F r^2/(r^2 + eta^2): exactly F but for the guard,
-// which only weakens the nearest pairs (by 2 % at r = 0.7 h) and needs a division per pair, 19 % of the
+// which only weakens the nearest pairs (by 2 % at r = 0.7 h) and needs a division per pair, about 17 % of the
 // continuity pass's time (docs/benchmarks.md, "Profile"). Every gradient kernel here has a finite F at
 // r > 0 (the spiky kernel's grows like 1/r, as does its pressure force), so the term is evaluated exactly.
 template <int Dim>
