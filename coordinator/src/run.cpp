@@ -21,6 +21,7 @@
 #include "sphfsi/coordinator/progress.hpp"
 #include "sphfsi/coordinator/recorder.hpp"
 #include "sphfsi/coordinator/scene.hpp"
+#include "sphfsi/coordinator/git_revision.hpp"
 #include "sphfsi/coordinator/version.hpp"
 #include "sphfsi/coordinator/watchpoints.hpp"
 
