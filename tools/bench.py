@@ -8,9 +8,10 @@ Workloads:
   fluid    the dam break of docs/benchmarks.md (Wendland, h = 1.41 dp, WCSPH with Fourtakas diffusion,
            artificial viscosity, symplectic Euler) at ~10k, ~40k and ~160k particles, 1 and 2 threads
   pcisph   the same with PCISPH (fewer steps: each costs 15-30 WCSPH steps)
-  coupled  the elastic gate (scenarios/elastic_gate.toml) through the coordinator: at the scene's quick
-           dp = 2 mm to 0.1 s with the participants sleeping at once while they wait and with their default
-           wait policy, and at the scene's comparison resolution dp = 1 mm to 0.05 s with the default policy
+  coupled  the elastic gate (scenarios/elastic_gate.toml) through the coordinator, to 0.05 s: as the scene
+           stands (dp = 1 mm, fluid on 2 threads, windows of up to 10 fluid steps) with the participants'
+           default wait policy and sleeping at once; with one window per fluid step (the thesis's rule) and
+           the fluid on 1 thread (the scene until 2026-11-25); and at the quick dp = 2 mm
 For each: particles, steps, wall seconds, particle-steps per second, peak resident memory per particle
 (the benchmark process's own peak resident set, VmHWM, divided by its particle count: wait4's ru_maxrss
 would carry this script's ~10 MiB across exec), and for the coupled run the share of
@@ -57,9 +58,9 @@ def fluid_rows(bin_dir, model, sizes, threads, steps, repeats):
     return rows
 
 
-def coupled_row(bin_dir, repeats, spin_us, dp, end_time):
-    """The elastic gate at fluid spacing dp to end_time, the scene's own coupling (one window per fluid step),
-    with the participants' wait policy set by SPHFSI_WAIT_SPIN_US (None: the runtime's default)."""
+def coupled_row(bin_dir, repeats, spin_us, overrides, end_time):
+    """The elastic gate to end_time with the scene overrides given, the participants' wait policy set by
+    SPHFSI_WAIT_SPIN_US (None: the runtime's default)."""
     shares, cpu, walls, windows = [], [], [], 0
     env = dict(os.environ)
     if spin_us is not None:
@@ -67,7 +68,7 @@ def coupled_row(bin_dir, repeats, spin_us, dp, end_time):
     for _ in range(repeats):
         out_dir = tempfile.mkdtemp(prefix="sphfsi-bench-gate-")
         run_measured([os.path.join(bin_dir, "sphfsi"), "run", os.path.join(ROOT, "scenarios", "elastic_gate.toml"), "--out",
-                      out_dir, "--quiet", "--set", f"run.end_time={end_time}", "--set", f"fluid.dp={dp}"], env)
+                      out_dir, "--quiet", "--set", f"run.end_time={end_time}"] + [a for o in overrides for a in ("--set", o)], env)
         import h5py
         with h5py.File(os.path.join(out_dir, "record.h5"), "r") as f:
             # Both shares over the time loop as a whole (windows, recording, snapshots): its wall time and the
@@ -100,15 +101,18 @@ def main():
             for m, t, n, s, wall, rate, lo, hi, rss in fluid_rows(bin_dir, model, sizes, [1, 2], steps, repeats):
                 print(f"| dam break {m} | {t} | {n} | {s} | {wall:.3f} | {rate / 1e6:.2f} M | {lo / 1e6:.2f} - {hi / 1e6:.2f} M | {rss:.0f} |")
     if only in (None, "coupled"):
-        # The participants' wait policy against sleeping at once at the scene's quick resolution (docs/benchmarks.md,
-        # "Coupled run"), then the default policy at the resolution the scene states for comparisons. A window
-        # costs the same messaging at either; the fluid's step costs about 4 times more at 1 mm.
-        cases = (("2 mm", 0.002, 0.1, "participants sleep at once", 0),
-                 ("2 mm", 0.002, 0.1, "participants spin 1 ms after each reply (the default)", None),
-                 ("1 mm", 0.001, 0.05, "participants spin 1 ms after each reply (the default)", None))
-        for label, dp, end_time, policy, spin_us in cases:
-            wall, windows, share, share_max, cpu, cpu_max = coupled_row(bin_dir, repeats, spin_us, dp, end_time)
-            print(f"\nelastic gate, dp = {label}, {end_time} s, {windows} windows, {policy}: wall {wall:.2f} s; messaging "
+        # The scene as it stands with the default wait policy and sleeping at once (docs/benchmarks.md, "Coupled
+        # run"), the scene's coupling until 2026-11-25 for comparison, and the quick resolution. A window costs
+        # about the same messaging at any resolution; the fluid's step costs about 4 times more at 1 mm than at 2.
+        thesis = ["coupling.window=thesis", "fluid.threads=1"]
+        cases = (("as the scene stands", [], "participants spin 1 ms after each reply (the default)", None),
+                 ("as the scene stands", [], "participants sleep at once", 0),
+                 ("one window per fluid step, fluid on 1 thread", thesis, "the default wait policy", None),
+                 ("quick look, dp = 2 mm", ["fluid.dp=0.002"], "the default wait policy", None))
+        end_time = 0.05
+        for label, overrides, policy, spin_us in cases:
+            wall, windows, share, share_max, cpu, cpu_max = coupled_row(bin_dir, repeats, spin_us, overrides, end_time)
+            print(f"\nelastic gate, {label}, {end_time} s, {windows} windows, {policy}: wall {wall:.2f} s; messaging "
                   f"and waiting {share:.2f} % of wall (max {share_max:.2f} %); coordinator CPU {cpu:.2f} % of one core "
                   f"(max {cpu_max:.2f} %)")
 
