@@ -15,7 +15,8 @@ Workloads:
 For each: particles, steps, wall seconds, particle-steps per second, peak resident memory per particle
 (the benchmark process's own peak resident set, VmHWM, divided by its particle count: wait4's ru_maxrss
 would carry this script's ~10 MiB across exec), and for the coupled run the share of
-wall time spent messaging and waiting, and the coordinator's own CPU use.
+wall time spent messaging and waiting, and the coordinator's own CPU use (its memory column is the fluid's
+own count of its arrays per particle, from the record: the participants are not this script's children).
 """
 import os
 import re
@@ -79,7 +80,12 @@ def coupled_row(bin_dir, repeats, spin_us, overrides, end_time):
             cpu.append(100 * f.attrs["coordinator_loop_cpu_s"] / wall)
             walls.append(wall)
             windows = f["windows/t"].shape[0]
-    return statistics.median(walls), windows, statistics.median(shares), max(shares), statistics.median(cpu), max(cpu)
+            fluid = f["participants/fluid"].attrs
+            particles, per_particle = int(fluid["particles"]), fluid["memory_bytes_per_particle"]
+            steps = int(f["windows/fluid.steps"][:].sum())
+    wall = statistics.median(walls)
+    return (wall, windows, particles, steps, particles * steps / wall, per_particle, statistics.median(shares), max(shares),
+            statistics.median(cpu), max(cpu))
 
 
 def main():
@@ -111,10 +117,12 @@ def main():
                  ("quick look, dp = 2 mm", ["fluid.dp=0.002"], "the default wait policy", None))
         end_time = 0.05
         for label, overrides, policy, spin_us in cases:
-            wall, windows, share, share_max, cpu, cpu_max = coupled_row(bin_dir, repeats, spin_us, overrides, end_time)
-            print(f"\nelastic gate, {label}, {end_time} s, {windows} windows, {policy}: wall {wall:.2f} s; messaging "
-                  f"and waiting {share:.2f} % of wall (max {share_max:.2f} %); coordinator CPU {cpu:.2f} % of one core "
-                  f"(max {cpu_max:.2f} %)")
+            wall, windows, n, steps, rate, per_particle, share, share_max, cpu, cpu_max = coupled_row(
+                bin_dir, repeats, spin_us, overrides, end_time)
+            print(f"\nelastic gate, {label}, {end_time} s, {policy}: {n} particles, {steps} fluid steps in {windows} "
+                  f"windows, wall {wall:.2f} s, {rate / 1e6:.2f} M particle-steps/s, {per_particle:.0f} B/particle (the "
+                  f"fluid's arrays); messaging and waiting {share:.2f} % of wall (max {share_max:.2f} %); coordinator "
+                  f"CPU {cpu:.2f} % of one core (max {cpu_max:.2f} %)")
 
 if __name__ == "__main__":
     main()
