@@ -67,7 +67,8 @@ def added_mass():
         if r["method"] not in methods:
             methods.append(r["method"])
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.2))
-    markers = "osD^v<"
+    markers = "osD^v<>ph"
+    assert len(methods) <= len(markers), "one marker per method"
     for m, mk in zip(methods, markers):
         sel = sorted((r for r in rs if r["method"] == m), key=lambda r: num(r["structure.material.rho"]))
         ratio = [num(r["structure.material.rho"]) * 0.02 / (1000 * 0.2) for r in sel]
@@ -92,7 +93,7 @@ def added_mass():
             edge = math.sqrt(x * last_ok) if last_ok else x
             for ax in axes:
                 ax.axvline(edge, color="r", lw=1.0, ls=":")
-            axes[1].annotate("serial-explicit\nunstable beyond", (edge, 0.88), xycoords=("data", "axes fraction"),
+            axes[1].annotate("serial-explicit, one fluid\nstep per window:\nunstable beyond", (edge, 0.88), xycoords=("data", "axes fraction"),
                              fontsize=7, color="r", textcoords="offset points", xytext=(3, 0))
             break
         last_ok = x
