@@ -20,6 +20,7 @@ own count of its arrays per particle, from the record: the participants are not 
 """
 import os
 import re
+import shutil
 import statistics
 import subprocess
 import sys
@@ -83,6 +84,7 @@ def coupled_row(bin_dir, repeats, spin_us, overrides, end_time):
             fluid = f["participants/fluid"].attrs
             particles, per_particle = int(fluid["particles"]), fluid["memory_bytes_per_particle"]
             steps = int(f["windows/fluid.steps"][:].sum())
+        shutil.rmtree(out_dir)  # a 1 mm record is about 7 MB
     wall = statistics.median(walls)
     return (wall, windows, particles, steps, particles * steps / wall, per_particle, statistics.median(shares), max(shares),
             statistics.median(cpu), max(cpu))

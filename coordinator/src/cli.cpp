@@ -2,9 +2,9 @@
 
 #include <iostream>
 
+#include "sphfsi/coordinator/git_revision.hpp"
 #include "sphfsi/coordinator/run.hpp"
 #include "sphfsi/coordinator/scene.hpp"
-#include "sphfsi/coordinator/git_revision.hpp"
 #include "sphfsi/coordinator/version.hpp"
 #include "sphfsi/protocol/message.hpp"
 

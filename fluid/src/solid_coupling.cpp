@@ -97,7 +97,7 @@ void InterfaceCoupling::kinematics(std::size_t k, double t, Vec2& x, Vec2& v, Ve
     a = Vec2{};
     for (int q = 0; q < 4; ++q) {
         const std::size_t i = static_cast<std::size_t>(w.vertex[q]);
-        // At s = 1 the end values themselves (u0 + (u1 - u0) need not round to u1): a window's end and the
+        // At the window's end the end values themselves (u0 + (u1 - u0) need not round to u1): a window's end and the
         // next window's start then put the solid particles at bitwise the same place, which lets the fluid
         // keep the rates of its end-of-window evaluation and only redo the part that depends on the new
         // window's acceleration (Simulation2D::refresh_solid_rates).

@@ -148,7 +148,7 @@ TEST_SUITE("adapter") {
         CHECK(std::abs(M - m) < 1e-13 * scale);
     }
 
-    TEST_CASE("a window's solids end bit for bit where the next window's start") {
+    TEST_CASE("a window's solids end bit for bit where the next window starts them") {
         // The fluid keeps its end-of-window rates and recomputes only what the new window's acceleration changes
         // (Simulation2D::refresh_solid_rates) when the solids start the new window exactly where they ended the
         // last; otherwise it evaluates everything again. Until 2026-11-25 the end was detected as
