@@ -42,7 +42,7 @@ void account_energy(const EnergyLimits& limits, std::uint64_t window, double t, 
           << s.fluid_energy << " J/m); in this window most at interface vertex " << v << " ("
           << s.mesh.vertices.values[2 * v] << ", " << s.mesh.vertices.values[2 * v + 1] << ") m. An explicit "
           << "scheme does this when the structure is light for the fluid on it (added mass): an implicit scheme "
-          << "(coupling.scheme) or smaller windows may hold";
+          << "(coupling.scheme) with one backward-Euler structure step per window (coupling.structure_steps) may hold";
         diverged(window, t, m.str());
     }
 
@@ -56,7 +56,9 @@ void account_energy(const EnergyLimits& limits, std::uint64_t window, double t, 
           << "coupling.max_energy_gain = " << limits.max_gain << " times the fluid's mechanical energy ("
           << s.fluid_energy << " J/m); with no external work they can only lose energy. An explicit scheme "
           << "does this under a light structure (added mass), also through the wall velocity when it has no "
-          << "predictor (coupling.predictor): an implicit scheme (coupling.scheme) may hold";
+          << "predictor (coupling.predictor); so does an implicit one whose structure sub-steps its own swings within a "
+          << "window: an implicit scheme (coupling.scheme) with one backward-Euler structure step per window "
+          << "(coupling.structure_steps) may hold";
         diverged(window, t, m.str());
     }
 }

@@ -38,6 +38,13 @@ void coupling_section(schema::TableSchema& s) {
              "thesis: one fluid step per window, structure sub-cycled n = int(dt_f/dt_s)+1 times; multi-rate: a "
              "window spans several fluid steps; fixed: window_dt.").fallback("thesis");
     c.number("window_dt", "Window length for window = \"fixed\".").unit("s").greater_than(0).at_most(10);
+    // "resolve" by default: the thesis's rule, and what a structure about as heavy as the water it moves needs to
+    // keep its own dynamics. A light one needs "window" (measured: docs/validation.md, "Added mass").
+    c.choice("structure_steps", {"resolve", "window"},
+             "resolve: the structure sub-cycles each window at the step it wants (thesis windows: n = int(dt_f/dt_s)+1); "
+             "window: one structure step per window, which a structure much lighter than the fluid it carries needs "
+             "under implicit coupling, with structure.time.integrator = \"backward_euler\" (docs/coupling.md).")
+        .fallback("resolve");
     c.integer("max_fluid_steps", "multi-rate: most fluid steps one window may span.").at_least(1).at_most(100000).fallback(10);
     c.choice("predictor", {"none", "linear", "quadratic"}, "Interface displacement predictor for explicit schemes.")
         .fallback("linear");

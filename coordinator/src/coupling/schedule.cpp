@@ -6,12 +6,14 @@ namespace sphfsi::coordinator {
 
 const char* window_rule_legend() {
     return "0 = thesis (one fluid step; structure n = int(dt_f/dt_s)+1), 1 = multi-rate (several fluid steps), "
-           "2 = fixed (coupling.window_dt), 3 = fluid alone (to the next output), 4 = structure alone (its wanted step)";
+           "2 = fixed (coupling.window_dt), 3 = fluid alone (to the next output), 4 = structure alone (its wanted step); "
+           "with coupling.structure_steps = \"window\" the structure takes one step per coupled window";
 }
 
 Schedule::Schedule(const Value& c)
     : rule_(c.at("window").as_string()), fixed_dt_(c.number_or("window_dt", 0.0)),
-      max_fluid_steps_(static_cast<int>(c.at("max_fluid_steps").as_int())) {}
+      max_fluid_steps_(static_cast<int>(c.at("max_fluid_steps").as_int())),
+      one_structure_step_(c.at("structure_steps").as_string() == "window") {}
 
 WindowPlan Schedule::next(double t, double fluid_dt, double structure_dt, double t_stop) const {
     WindowPlan p;
@@ -34,7 +36,9 @@ WindowPlan Schedule::next(double t, double fluid_dt, double structure_dt, double
         p.clipped = t + p.dt > t_stop;
         p.dt = t_stop - t;
     }
-    if (p.rule == WindowRule::Thesis)
+    if (one_structure_step_)
+        p.structure_substeps = 1;  // why: docs/coupling.md, "A light structure: one structure step per window"
+    else if (p.rule == WindowRule::Thesis)
         p.structure_substeps = static_cast<std::uint32_t>(std::floor(p.dt / structure_dt)) + 1;
     else
         p.structure_substeps = static_cast<std::uint32_t>(std::max(1.0, std::ceil(p.dt / structure_dt * (1 - 1e-12))));

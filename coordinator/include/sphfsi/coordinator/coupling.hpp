@@ -31,6 +31,7 @@ private:
     std::string rule_;
     double fixed_dt_ = 0.0;
     int max_fluid_steps_ = 1;
+    bool one_structure_step_ = false;  // coupling.structure_steps = "window"
 };
 
 struct WindowOutcome {
