@@ -66,46 +66,50 @@ def added_mass():
     for r in rs:
         if r["method"] not in methods:
             methods.append(r["method"])
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2))
-    markers = "osD^v<>ph"
+    fig, axes = plt.subplots(1, 2, figsize=(12, 5))
+    markers = "osD^v<>ph*XP"
     assert len(methods) <= len(markers), "one marker per method"
     for m, mk in zip(methods, markers):
+        # Line style by window and structure step: the thesis window sub-cycling the structure (solid),
+        # multi-rate windows (dashed), one structure step per window (dash-dotted).
+        style = "--" if "multi-rate" in m else "-." if " step" in m else "-"
         sel = sorted((r for r in rs if r["method"] == m), key=lambda r: num(r["structure.material.rho"]))
         ratio = [num(r["structure.material.rho"]) * 0.02 / (1000 * 0.2) for r in sel]
         ok = [r["status"] == "completed" for r in sel]
         dev = [num(r["mid.max_rel"]) for r in sel]
         it = [num(r["iterations.value"]) for r in sel]
         line, = axes[0].loglog([x for x, o in zip(ratio, ok) if o], [d for d, o in zip(dev, ok) if o],
-                               marker=mk, label=m)
+                               marker=mk, ls=style, label=m)
         for x, o in zip(ratio, ok):
             if not o:
-                axes[0].plot([x], [300], marker="x", ms=10, color=line.get_color())
-                axes[0].annotate("diverged", (x, 300), fontsize=7, color=line.get_color(),
-                                 textcoords="offset points", xytext=(4, -10))
-        axes[1].semilogx([x for x, o in zip(ratio, ok) if o], [i for i, o in zip(it, ok) if o], marker=mk, label=m)
-    # The explicit scheme's failure point: between its last stable ratio and the first unstable one
-    # (max |u - w| > |w| or a failed run), drawn on both panels.
-    expl = sorted((r for r in rs if r["method"] == "serial-explicit"), key=lambda r: -num(r["structure.material.rho"]))
-    last_ok = None
-    for r in expl:
-        x = num(r["structure.material.rho"]) * 0.02 / (1000 * 0.2)
-        if r["status"] != "completed" or num(r["mid.max_rel"]) > 1.0:
-            edge = math.sqrt(x * last_ok) if last_ok else x
-            for ax in axes:
-                ax.axvline(edge, color="r", lw=1.0, ls=":")
-            axes[1].annotate("serial-explicit, one fluid\nstep per window:\nunstable beyond", (edge, 0.88), xycoords=("data", "axes fraction"),
-                             fontsize=7, color="r", textcoords="offset points", xytext=(3, 0))
-            break
-        last_ok = x
+                axes[0].plot([x], [300], marker=mk, ms=8, mfc="none", color=line.get_color())
+        axes[1].semilogx([x for x, o in zip(ratio, ok) if o], [i for i, o in zip(it, ok) if o], marker=mk, ls=style,
+                         label=m)
+    axes[0].annotate("runs that diverged", (8, 300), fontsize=7, textcoords="offset points", xytext=(0, 8))
+    # The explicit scheme's failure point, sub-cycled structure and one structure step per window: between
+    # its last stable ratio and the first unstable one (max |u - w| > |w| or a failed run), on both panels.
+    for explicit, ls, y in (("serial-explicit", ":", 0.9), ("serial-explicit, one BE step", "-.", 0.7)):
+        expl = sorted((r for r in rs if r["method"] == explicit), key=lambda r: -num(r["structure.material.rho"]))
+        last_ok = None
+        for r in expl:
+            x = num(r["structure.material.rho"]) * 0.02 / (1000 * 0.2)
+            if r["status"] != "completed" or num(r["mid.max_rel"]) > 1.0:
+                edge = math.sqrt(x * last_ok) if last_ok else x
+                for ax in axes:
+                    ax.axvline(edge, color="r", lw=1.0, ls=ls)
+                axes[1].annotate(explicit + ":\nunstable beyond", (edge, y), xycoords=("data", "axes fraction"),
+                                 fontsize=7, color="r", textcoords="offset points", xytext=(3, 0))
+                break
+            last_ok = x
     axes[0].axhline(1.0, color="k", lw=0.8, ls="--")
     axes[0].annotate("undamped overshoot of a sudden load", (8, 1.15), fontsize=7)
-    axes[0].set_ylabel("max |u - w| / |w|, mid-span (x: run failed)")
+    axes[0].set_ylabel("max |u - w| / |w|, mid-span (top row: run diverged)")
     axes[1].set_ylabel("coupling iterations per window (mean)")
     for ax in axes:
         ax.set_xlabel("mass ratio rho_s t / (rho_f L)")
         ax.grid(True, which="both", alpha=0.3)
         ax.invert_xaxis()
-    axes[0].legend(fontsize=7)
+    axes[1].legend(fontsize=6.5, loc="upper left")
     fig.suptitle("plate under water (E = 0.7 GPa): added-mass stability", fontsize=11)
     save(fig, "added_mass.png")
 
