@@ -242,7 +242,7 @@ void Runner::initialise(std::optional<Checkpoint>& resume) {
         energy_limits_.external_work = fluid_does_external_work();
         // A warning, not an error: heavier structures are fine with any integrator (docs/validation.md).
         const Value* integrator = find_path(scene_.tree, "structure.time.integrator");
-        if (c.at("structure_steps").as_string() == "window" && (!integrator || integrator->as_string() != "backward_euler"))
+        if (schedule_->one_structure_step() && (!integrator || integrator->as_string() != "backward_euler"))
             log("warning: coupling.structure_steps = \"window\" is meant with structure.time.integrator = "
                 "\"backward_euler\", whose step acceleration is the window's mean; one generalized-alpha step per "
                 "window failed from mass ratio 0.001 on the added-mass plate (docs/coupling.md)");

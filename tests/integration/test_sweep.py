@@ -707,11 +707,17 @@ def test_added_mass_explicit_diverges_implicit_holds():
     one_step = ("--set", 'coupling.structure_steps="window"', "--set", 'structure.time.integrator="backward_euler"')
     code, msg, dev = run("aitken-sub-cycled-3e-4", 3.0, *aitken)
     assert code == 1 and "coupling diverged" in msg, (code, dev, msg)
+    assert "coupling.structure_steps" in msg, msg  # the energy check names the remedy
     for name, scheme in (("aitken", aitken), ("iqn", iqn)):
         code, msg, dev = run(f"{name}-one-step-3e-4", 3.0, *scheme, *one_step)
         assert code == 0 and dev <= 1.0, (name, code, dev, msg)
+        assert "warning: coupling.structure_steps" not in msg, msg
     code, msg, dev = run("explicit-one-step-1e-3", 10.0, *one_step)
     assert code == 1 and "coupling diverged" in msg, (code, dev, msg)
+    # One step per window with the structure's default integrator (generalized-alpha) is warned about.
+    code, msg, dev = run("aitken-one-gen-alpha-step", 10000.0, *aitken, "--set", 'coupling.structure_steps="window"',
+                         "--set", "run.end_time=0.01")
+    assert code == 0 and 'warning: coupling.structure_steps = "window" is meant with' in msg, (code, msg)
 
 
 if __name__ == "__main__":

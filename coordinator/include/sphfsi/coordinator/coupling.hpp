@@ -26,6 +26,7 @@ class Schedule {
 public:
     explicit Schedule(const Value& coupling);
     WindowPlan next(double t, double fluid_dt, double structure_dt, double t_stop) const;
+    bool one_structure_step() const { return one_structure_step_; }
 
 private:
     std::string rule_;
