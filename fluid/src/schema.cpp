@@ -238,6 +238,12 @@ TableSchema build() {
     TableSchema& failure = s.table("failure", "bounds beyond which the run stops as diverged");
     failure.number("min_density_ratio", "smallest rho / rho0 of a fluid particle").at_least(0).fallback(0.01);
     failure.number("max_density_ratio", "largest rho / rho0 of a fluid particle").greater_than(1).fallback(1.5);
+    // Why 1 by default: at |v| >= c0 no pressure wave can warn a particle's neighbours ahead of it, so a
+    // weakly compressible model is meaningless there whatever the scene; a runaway particle crosses it within
+    // a few steps, long before its density or the step floor gives it away. Scenes that know their speeds
+    // tighten it (the c0 = 10 u_max rule means a healthy flow stays near 0.1).
+    failure.number("max_mach", "largest speed / c0 of a fluid particle (c0: pressure.c0, else 10 u_max; standard "
+                               "SPH: sqrt(k)); no bound where c0 is 0").greater_than(0).fallback(1.0);
 
     // Sub-tables the scene leaves out stand for their defaults (the schema only fills keys that are present).
     s.check([](const Value& fluid, const std::string& path, Errors& errors) {

@@ -111,6 +111,7 @@ FluidSettings read_settings(const sphfsi::Value& raw) {
     const auto& fl = f.at("failure");
     s.min_density_ratio = fl.at("min_density_ratio").as_double();
     s.max_density_ratio = fl.at("max_density_ratio").as_double();
+    s.max_mach = fl.at("max_mach").as_double();
     return s;
 }
 

@@ -774,6 +774,7 @@ double Simulation2D::check_state() {
     const auto& P = st_.P;
     const auto& g = geometry_;
     const double lo = s_.min_density_ratio * s_.rho0, hi = s_.max_density_ratio * s_.rho0;
+    const double v_cap = s_.max_mach * c0_;  // 0: no reference speed (PCISPH without gravity or u_max)
     bool bad = false;
     double rho_max = 0.0;
     const long long n = static_cast<long long>(P.size());
@@ -781,6 +782,7 @@ double Simulation2D::check_state() {
         const V& x = P.x[i];
         if (!all_finite(x) || !all_finite(P.v[i]) || !std::isfinite(P.rho[i])) return true;
         if (P.rho[i] < lo || P.rho[i] > hi) return true;
+        if (v_cap > 0.0 && dot(P.v[i], P.v[i]) > v_cap * v_cap) return true;
         const bool below_wall_top = g.lid || x[1] <= g.height;  // above an open tank's side walls is air
         if (g.walls_x && below_wall_top && (x[0] < -g.thickness || x[0] > g.width + g.thickness)) return true;
         if (g.floor && x[1] < -g.thickness) return true;
@@ -810,6 +812,8 @@ double Simulation2D::check_state() {
     if (!std::isfinite(P.rho[i])) fail(i, "density", P.rho[i], "not finite");
     if (P.rho[i] < lo) fail(i, "density", P.rho[i], "below min_density_ratio * rho0 = " + fmt(lo) + " kg/m^3");
     if (P.rho[i] > hi) fail(i, "density", P.rho[i], "above max_density_ratio * rho0 = " + fmt(hi) + " kg/m^3");
+    if (v_cap > 0.0 && dot(P.v[i], P.v[i]) > v_cap * v_cap)
+        fail(i, "speed", norm(P.v[i]), "above max_mach * c0 = " + fmt(v_cap) + " m/s, at (" + fmt(x[0]) + ", " + fmt(x[1]) + ") m");
     if (g.walls_x && x[0] < -g.thickness && (g.lid || x[1] <= g.height)) fail(i, "x", x[0], "beyond the outer face of the left wall at x = " + fmt(-g.thickness) + " m: lost through the wall");
     if (g.walls_x && x[0] > g.width + g.thickness && (g.lid || x[1] <= g.height)) fail(i, "x", x[0], "beyond the outer face of the right wall at x = " + fmt(g.width + g.thickness) + " m: lost through the wall");
     if (g.floor && x[1] < -g.thickness) fail(i, "y", x[1], "below the outer face of the floor at y = " + fmt(-g.thickness) + " m: lost through the wall");

@@ -68,6 +68,7 @@ struct FluidSettings {
     double cfl = 0.4, force_factor = 0.25, viscous_factor = 0.125, dt_min = 1e-8, dt_max = 0.0;
 
     double min_density_ratio = 0.01, max_density_ratio = 1.5;
+    double max_mach = 1.0;  // largest |v| / c0 of a fluid particle (c0: Simulation2D::c0)
 
     double h() const { return h_over_dp * dp; }
     // Highest water top: the H of sqrt(2 g H) estimates.
