@@ -21,14 +21,14 @@ RUN_COLUMNS = {
     "fluid_particles": ("fluid particles (walls and solids not counted)", ""),
     "particles_total": ("all SPH particles (fluid, wall, solid)", ""),
     "fluid_substeps": ("sum over windows of fluid sub-steps", ""),
-    "particle_steps": ("fluid particles x sum of fluid sub-steps x coupling iterations (empty without a fluid)",
+    "particle_steps": ("fluid particles x sum of fluid sub-steps, every coupling iteration's (empty without a fluid)",
                        "particle-steps"),
     "fluid_solver_iterations": ("sum of PCISPH iterations", ""),
     "fluid_threads": ("OpenMP threads the fluid reported", ""),
     "structure_elements": ("beam elements", ""),
     "structure_substeps": ("sum over windows of structure sub-steps", ""),
-    "element_steps": ("structure elements x sum of structure sub-steps x coupling iterations (empty without a "
-                      "structure)", "element-steps"),
+    "element_steps": ("structure elements x sum of structure sub-steps, every coupling iteration's (empty "
+                      "without a structure)", "element-steps"),
     "structure_solver_iterations": ("sum of the structure's Newton iterations", ""),
 }
 COST_LABELS = {
