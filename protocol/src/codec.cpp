@@ -486,6 +486,26 @@ std::string encode(const Message& m) {
     return std::move(pk.bytes());
 }
 
+namespace {
+
+// The envelope's fields after seq, and the body.
+void read_envelope_rest(MapReader& env, Message& m) {
+    m.version = need_u32(env.need("v"), "envelope.v");
+    std::string type = need_string(env.need("type"), "envelope.type");
+    if (!parse_message_type(type, m.type)) throw ProtocolError("unknown_type", "unknown message type \"" + type + "\"");
+    m.token = need_string(env.need("token"), "envelope.token");
+    // Check the version before reading the body: another version's body may legitimately differ.
+    bool hello = m.type == MessageType::Hello || m.type == MessageType::Error;
+    if (!hello && (m.version < kOldestSupportedVersion || m.version > kProtocolVersion))
+        throw ProtocolError("version_mismatch", "message speaks protocol version " + std::to_string(m.version) +
+                                                    "; this side speaks " + std::to_string(kOldestSupportedVersion) +
+                                                    " to " + std::to_string(kProtocolVersion));
+    m.body = read_body(m.type, env.need("body"));
+    env.finish();
+}
+
+}  // namespace
+
 Message decode(const void* data, std::size_t size, const DecodeLimits& limits) {
     if (size > limits.max_bytes)
         throw ProtocolError("too_large", "message of " + std::to_string(size) + " bytes exceeds the limit of " +
@@ -505,19 +525,13 @@ Message decode(const void* data, std::size_t size, const DecodeLimits& limits) {
 
     MapReader env(oh.get(), "envelope");
     Message m;
-    m.version = need_u32(env.need("v"), "envelope.v");
-    std::string type = need_string(env.need("type"), "envelope.type");
-    if (!parse_message_type(type, m.type)) throw ProtocolError("unknown_type", "unknown message type \"" + type + "\"");
+    // seq first, so that the refusal of a message whose seq is readable answers it by that seq.
     m.seq = need_uint(env.need("seq"), "envelope.seq");
-    m.token = need_string(env.need("token"), "envelope.token");
-    // Check the version before reading the body: another version's body may legitimately differ.
-    bool hello = m.type == MessageType::Hello || m.type == MessageType::Error;
-    if (!hello && (m.version < kOldestSupportedVersion || m.version > kProtocolVersion))
-        throw ProtocolError("version_mismatch", "message speaks protocol version " + std::to_string(m.version) +
-                                                    "; this side speaks " + std::to_string(kOldestSupportedVersion) +
-                                                    " to " + std::to_string(kProtocolVersion));
-    m.body = read_body(m.type, env.need("body"));
-    env.finish();
+    try {
+        read_envelope_rest(env, m);
+    } catch (const ProtocolError& e) {
+        throw ProtocolError(e.code(), e.what(), m.seq);
+    }
     return m;
 }
 

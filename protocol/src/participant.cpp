@@ -191,7 +191,7 @@ private:
                 m = decode(raw.data(), raw.size());
             } catch (const ProtocolError& e) {
                 log(std::string("refused a malformed message: ") + e.what());
-                reply_error(0, e.code(), e.what());
+                reply_error(e.seq(), e.code(), e.what());
                 continue;
             }
             if (m.token != opt_.token) {
@@ -199,6 +199,11 @@ private:
                 continue;
             }
             if (m.type == MessageType::Heartbeat) continue;
+            if (m.type == MessageType::Error) {  // not a request: answering it could start a ping-pong of ERRORs
+                const auto& e = m.as<ErrorReply>();
+                log("the coordinator sent ERROR " + e.code + ": " + e.message);
+                continue;
+            }
             if (m.type == MessageType::Bye) {
                 reply(m.seq, MessageType::Ack);
                 return 0;

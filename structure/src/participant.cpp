@@ -69,7 +69,7 @@ AdvanceReply StructureSolver::advance(const AdvanceRequest& request, Progress& p
     if (!(request.dt > 0) || !std::isfinite(request.dt))
         throw SolverError("internal", "structure: ADVANCE with dt = " + num(request.dt));
     if (std::abs(request.t - t0) > 1e-9 * std::max(request.dt, std::abs(t0)))
-        throw SolverError("internal", "structure: ADVANCE from t=" + num(request.t) + " but the structure is at t=" + num(t0));
+        throw SolverError("bad_state", "structure: ADVANCE from t=" + num(request.t) + " but the structure is at t=" + num(t0));
 
     std::uint32_t n = request.substeps;
     if (n == 0) n = static_cast<std::uint32_t>(std::max(1.0, std::ceil(request.dt / dt_wanted_ * (1.0 - 1e-12))));
@@ -114,7 +114,7 @@ AdvanceReply StructureSolver::advance(const AdvanceRequest& request, Progress& p
 void StructureSolver::save() { saved_ = dyn().state(); }
 
 void StructureSolver::restore() {
-    if (!saved_) throw SolverError("internal", "structure: RESTORE without a SAVE");
+    if (!saved_) throw SolverError("bad_state", "structure: RESTORE without a SAVE");
     dyn().state() = *saved_;
 }
 

@@ -94,6 +94,12 @@ def test_stray_connection_is_refused_and_logged():
     stray.send(b"\x00garbage")  # a stranger's garbage is refused too, and is not fatal
     assert stray.poll(5000)
     assert msgpack.unpackb(stray.recv(), raw=False)["body"]["code"] == "bad_message"
+    bad_hello = dict(hello, colour="blue")  # readable seq, a key HELLO does not have: refused by its seq
+    stray.send(msgpack.packb({"v": 1, "type": "HELLO", "seq": 9, "token": "0" * 32, "body": bad_hello},
+                             use_bin_type=True))
+    assert stray.poll(5000)
+    reply = msgpack.unpackb(stray.recv(), raw=False)
+    assert reply["body"]["code"] == "bad_message" and reply["seq"] == 9 and reply["body"]["in_reply_to"] == 9, reply
     stray.close()
     ctx.term()
     code, text = run.finish(timeout=60)

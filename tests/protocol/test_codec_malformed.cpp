@@ -105,6 +105,30 @@ TEST_CASE("wrong types, missing and unknown keys are bad_message") {
     CHECK(code_of(std::string(buf.data(), buf.size())) == "bad_message");
 }
 
+TEST_CASE("a refusal names the offending message's seq where it could be read, else 0") {
+    // docs/protocol.md, "Envelope": the ERROR answering it carries that seq and in_reply_to.
+    auto seq_of = [](const std::string& bytes) {
+        try {
+            decode(bytes.data(), bytes.size());
+        } catch (const ProtocolError& e) {
+            return e.seq();
+        }
+        return std::uint64_t{999};
+    };
+    auto hb = [](Packer& pk) { pk.pack_map(1); pk.pack("progress"); pk.pack(1); };
+    CHECK(seq_of(envelope([](Packer& pk) { pk.pack_map(0); })) == 1);  // envelope() packs seq 1
+    CHECK(seq_of(envelope(hb, "DANCE")) == 1);
+    CHECK(seq_of(envelope(hb, "HEARTBEAT", kProtocolVersion + 1)) == 1);
+    CHECK(seq_of(envelope(hb, "HEARTBEAT", kProtocolVersion, true)) == 1);
+    CHECK(seq_of(std::string("\xc1 not msgpack")) == 0);
+    msgpack::sbuffer buf;
+    Packer pk(buf);
+    pk.pack_map(1);
+    pk.pack("seq");
+    pk.pack("seven");  // a seq that is not a number cannot be answered by
+    CHECK(seq_of(std::string(buf.data(), buf.size())) == 0);
+}
+
 TEST_CASE("arrays whose bytes do not match their shape or dtype are refused") {
     CHECK(code_of(advance_with_force(3, 47)) == "bad_message");
     CHECK(code_of(advance_with_force(3, 49)) == "bad_message");

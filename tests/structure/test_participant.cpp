@@ -194,7 +194,7 @@ TEST_CASE("errors carry the protocol's codes") {
 
     s.init(request(coupled_scene()));
     Progress p;
-    CHECK(code_of([&] { s.advance(window(0.5, 1e-3, 1), p); }) == "internal");  // wrong window start
+    CHECK(code_of([&] { s.advance(window(0.5, 1e-3, 1), p); }) == "bad_state");  // wrong window start (docs/protocol.md)
     Fields nan = forces(s, 1.0);
     std::get<F64Array>(nan["force"])(3, 0) = std::nan("");
     CHECK(code_of([&] { s.advance(window(0.0, 1e-3, 1, nan), p); }) == "diverged");

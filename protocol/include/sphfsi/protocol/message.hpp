@@ -84,6 +84,14 @@ struct Message {
 class ProtocolError : public CodedError {
 public:
     using CodedError::CodedError;
+    ProtocolError(std::string code, const std::string& message, std::uint64_t seq)
+        : CodedError(std::move(code), message), seq_(seq) {}
+    // The offending message's envelope seq where it could be read, else 0: the ERROR answering it carries
+    // it as seq and in_reply_to (docs/protocol.md, "Envelope").
+    std::uint64_t seq() const { return seq_; }
+
+private:
+    std::uint64_t seq_ = 0;
 };
 
 template <class T>
