@@ -92,6 +92,16 @@ def coupled_row(bin_dir, repeats, spin_us, overrides, end_time):
 
 def main():
     args = sys.argv[1:]
+    # Anything but the documented options (--help included) prints the usage instead of starting a long run.
+    i = 0
+    while i < len(args):
+        if args[i] in ("--bin", "--repeats", "--only") and i + 1 < len(args):
+            i += 2
+        elif args[i] == "--quick":
+            i += 1
+        else:
+            print(__doc__, file=sys.stderr)
+            sys.exit(0 if args[i] in ("-h", "--help") else 2)
     opt = lambda name, default: args[args.index(name) + 1] if name in args else default
     bin_dir = os.path.abspath(opt("--bin", os.path.join(ROOT, "build", "bin")))
     repeats = int(opt("--repeats", "5"))

@@ -145,7 +145,11 @@ int main(int argc, char** argv) {
         return run_participant(static_cast<int>(args.size()), args.data(), std::make_unique<NoPhysics>());
     }
     if (argc > 2 && std::strcmp(argv[1], "--echo") == 0) return echo(argv[2]);
-    int repeats = argc > 1 ? std::atoi(argv[1]) : 2000;
+    const int repeats = argc > 1 ? std::atoi(argv[1]) : 2000;
+    if (argc > 2 || repeats <= 0) {  // --help too: print the usage rather than run a benchmark nobody asked for
+        std::fprintf(stderr, "usage: %s [REPEATS (default 2000)]\n", argv[0]);
+        return 2;
+    }
     std::printf("round trips between two processes on 127.0.0.1, %d repeats\n", repeats);
     std::printf("%-44s %10s %10s\n", "exchange", "median us", "p90 us");
     const std::string self = coordinator::own_directory() + "/sphfsi-bench-messaging";

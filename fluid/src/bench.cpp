@@ -79,12 +79,12 @@ int main(int argc, char** argv) {
     sphfsi::fluid::ensure_openmp_wait_policy(argv);
     std::vector<std::string> sizes{"10k"}, threads{"1", "2"}, models{"wcsph", "pcisph", "standard"};
     int steps = 100;
-    for (int i = 1; i + 1 < argc; i += 2) {
-        const std::string a = argv[i], v = argv[i + 1];
-        if (a == "--sizes") sizes = split(v);
-        else if (a == "--threads") threads = split(v);
-        else if (a == "--models") models = split(v);
-        else if (a == "--steps") steps = std::atoi(v.c_str());
+    for (int i = 1; i < argc; i += 2) {  // options come in pairs; anything else (--help too) prints the usage
+        const std::string a = argv[i], v = i + 1 < argc ? argv[i + 1] : "";
+        if (!v.empty() && a == "--sizes") sizes = split(v);
+        else if (!v.empty() && a == "--threads") threads = split(v);
+        else if (!v.empty() && a == "--models") models = split(v);
+        else if (!v.empty() && a == "--steps") steps = std::atoi(v.c_str());
         else {
             std::fprintf(stderr, "usage: %s [--sizes 10k,40k,160k] [--threads 1,2] [--models wcsph,pcisph,standard] [--steps N]\n", argv[0]);
             return 2;
