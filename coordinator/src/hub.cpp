@@ -145,7 +145,8 @@ void Hub::pump(int wait_ms) {
             if (multipart) throw ProtocolError("bad_message", "message has more than one frame");
             m = decode(payload.data(), payload.size());
         } catch (const ProtocolError& e) {
-            send_raw(id, make_message(MessageType::Error, e.seq(), token_, ErrorReply{e.code(), e.what(), e.seq()}));
+            if (e.answerable())  // a malformed HEARTBEAT or ERROR is not answered (docs/protocol.md, "Errors")
+                send_raw(id, make_message(MessageType::Error, e.seq(), token_, ErrorReply{e.code(), e.what(), e.seq()}));
             throw ParticipantFailure(role, "garbage", "sent a malformed message (" + e.code() + "): " + e.what());
         }
         messaging_s_ += seconds_since(start);
@@ -173,8 +174,11 @@ void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) 
     try {
         m = decode(payload.data(), payload.size());
     } catch (const ProtocolError& e) {
+        if (!e.answerable()) return log_("ignored a malformed " + e.type_name() + " from an unknown connection");
         return refuse(e.seq(), e.code(), std::string("malformed first message: ") + e.what());
     }
+    if (m.type == MessageType::Error || m.type == MessageType::Heartbeat)  // not requests: never answered
+        return log_("ignored " + std::string(to_string(m.type)) + " from an unknown connection");
     if (m.type != MessageType::Hello) return refuse(m.seq, "refused", "first message must be HELLO, got " + std::string(to_string(m.type)));
     if (m.token != token_) return refuse(m.seq, "bad_token", "HELLO carries a token that is not this run's (stale or stray participant)");
     const auto& h = m.as<Hello>();

@@ -488,10 +488,10 @@ std::string encode(const Message& m) {
 
 namespace {
 
-// The envelope's fields after seq, and the body.
-void read_envelope_rest(MapReader& env, Message& m) {
+// The envelope's fields after seq, and the body; `type` is set as soon as it is read.
+void read_envelope_rest(MapReader& env, Message& m, std::string& type) {
+    type = need_string(env.need("type"), "envelope.type");
     m.version = need_u32(env.need("v"), "envelope.v");
-    std::string type = need_string(env.need("type"), "envelope.type");
     if (!parse_message_type(type, m.type)) throw ProtocolError("unknown_type", "unknown message type \"" + type + "\"");
     m.token = need_string(env.need("token"), "envelope.token");
     // Check the version before reading the body: another version's body may legitimately differ.
@@ -527,10 +527,11 @@ Message decode(const void* data, std::size_t size, const DecodeLimits& limits) {
     Message m;
     // seq first, so that the refusal of a message whose seq is readable answers it by that seq.
     m.seq = need_uint(env.need("seq"), "envelope.seq");
+    std::string type;
     try {
-        read_envelope_rest(env, m);
+        read_envelope_rest(env, m, type);
     } catch (const ProtocolError& e) {
-        throw ProtocolError(e.code(), e.what(), m.seq);
+        throw ProtocolError(e.code(), e.what(), m.seq, type);
     }
     return m;
 }

@@ -191,17 +191,19 @@ private:
                 m = decode(raw.data(), raw.size());
             } catch (const ProtocolError& e) {
                 log(std::string("refused a malformed message: ") + e.what());
-                reply_error(e.seq(), e.code(), e.what());
+                if (e.answerable()) reply_error(e.seq(), e.code(), e.what());
+                continue;
+            }
+            // HEARTBEAT and ERROR are not requests and are never answered, whatever their token: answering an
+            // ERROR could start a ping-pong of ERRORs.
+            if (m.type == MessageType::Heartbeat) continue;
+            if (m.type == MessageType::Error) {
+                const auto& e = m.as<ErrorReply>();
+                log("the coordinator sent ERROR " + e.code + ": " + e.message);
                 continue;
             }
             if (m.token != opt_.token) {
                 reply_error(m.seq, "bad_token", "message carries a token that is not this run's");
-                continue;
-            }
-            if (m.type == MessageType::Heartbeat) continue;
-            if (m.type == MessageType::Error) {  // not a request: answering it could start a ping-pong of ERRORs
-                const auto& e = m.as<ErrorReply>();
-                log("the coordinator sent ERROR " + e.code + ": " + e.message);
                 continue;
             }
             if (m.type == MessageType::Bye) {

@@ -100,6 +100,10 @@ def test_stray_connection_is_refused_and_logged():
     assert stray.poll(5000)
     reply = msgpack.unpackb(stray.recv(), raw=False)
     assert reply["body"]["code"] == "bad_message" and reply["seq"] == 9 and reply["body"]["in_reply_to"] == 9, reply
+    # An ERROR is never answered, not even a stranger's (an answer could start a ping-pong of ERRORs).
+    stray.send(msgpack.packb({"v": 1, "type": "ERROR", "seq": 10, "token": "0" * 32,
+                              "body": {"code": "internal", "message": "stray", "in_reply_to": 0}}, use_bin_type=True))
+    assert not stray.poll(1000), msgpack.unpackb(stray.recv(), raw=False)
     stray.close()
     ctx.term()
     code, text = run.finish(timeout=60)

@@ -79,6 +79,11 @@ def test_runtime_answers_as_the_protocol_document_says():
         # An ERROR from the coordinator is not a request: logged, never answered.
         c.send_raw({"v": 1, "type": "ERROR", "seq": 7, "token": TOKEN,
                     "body": {"code": "internal", "message": "a test ERROR", "in_reply_to": 0}})
+        c.send_raw({"v": 1, "type": "ERROR", "seq": 7, "token": "wrong",  # whatever its token
+                    "body": {"code": "internal", "message": "a stray ERROR", "in_reply_to": 0}})
+        # Nor is a malformed HEARTBEAT or ERROR answered (an answer to one would arrive before READY below).
+        c.send_raw({"v": 1, "type": "HEARTBEAT", "seq": 7, "token": TOKEN, "body": {"progress": "lots"}})
+        c.send_raw({"v": 1, "type": "ERROR", "seq": 7, "token": TOKEN, "body": {"code": "internal"}})
         ready = c.request("INIT", 8, {"config": config, "t0": 0.0, "interface": None, "state": b""})
         assert ready is not None and ready["type"] == "READY" and ready["seq"] == 8, ready  # not an answer to 7
         # RESTORE before any SAVE, and ADVANCE from a time that is not the participant's: bad_state.

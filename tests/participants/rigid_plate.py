@@ -466,7 +466,7 @@ class Participant:
     def send_error(self, code, message, in_reply_to):
         log("ERROR %s (in reply to seq %d): %s" % (code, in_reply_to, message))
         body = {"code": code, "message": message, "in_reply_to": in_reply_to}
-        self.send("ERROR", in_reply_to if in_reply_to > 0 else None, body)
+        self.send("ERROR", in_reply_to, body)  # a reply carries the seq it answers; 0 if that was unreadable
 
     def _heartbeat_loop(self):
         period = max(0.001, 0.5 * self.heartbeat_s)
@@ -527,7 +527,7 @@ class Participant:
 
     # -- dispatch -------------------------------------------------------------------------------------------------
     def handle(self, frames):
-        seq = 0
+        seq, type_ = 0, None
         try:
             if len(frames) != 1:
                 raise bad("a message must be one frame, got %d" % len(frames))
@@ -561,7 +561,10 @@ class Participant:
             if not isinstance(body, dict):
                 raise bad("envelope body must be a map")
         except ProtocolError as e:
-            self.send_error(e.code, e.message, seq)
+            if type_ in ("HEARTBEAT", "ERROR"):  # not requests: a malformed one is logged, never answered
+                log("ignoring a malformed %s: %s" % (type_, e.message))
+            else:
+                self.send_error(e.code, e.message, seq)
             return
 
         if type_ == "HEARTBEAT":             # never answered, even when wrong
@@ -581,6 +584,9 @@ class Participant:
             # coordinator's token (bad_token), so take it as it comes
             log("the coordinator refused us: %r" % (body,))
             raise Exit(3)
+        if type_ == "ERROR":  # not a request: logged and never answered, whatever its version or token
+            log("the coordinator sent ERROR (seq %d): %r" % (seq, body))
+            return
 
         try:
             if self.version is not None:
@@ -595,9 +601,6 @@ class Participant:
             if type_ not in MESSAGE_TYPES:
                 raise ProtocolError("unknown_type", "%r is not a message type of protocol version %d"
                                     % (type_[:40], v))
-            if type_ == "ERROR":
-                log("the coordinator sent ERROR (seq %d): %r" % (seq, body))
-                return
             if type_ == "WELCOME":
                 self.on_welcome(seq, body)
                 return

@@ -23,7 +23,7 @@ std::string code_of(const std::string& bytes, const DecodeLimits& limits = {}) {
 
 // An envelope with the given body writer and optional changes to the envelope itself.
 std::string envelope(const std::function<void(Packer&)>& body, const std::string& type = "HEARTBEAT",
-                     std::uint32_t v = kProtocolVersion, bool extra_key = false) {
+                     std::uint32_t v = kProtocolVersion, bool extra_key = false, std::uint64_t seq = 1) {
     msgpack::sbuffer buf;
     Packer pk(buf);
     pk.pack_map(extra_key ? 6 : 5);
@@ -32,7 +32,7 @@ std::string envelope(const std::function<void(Packer&)>& body, const std::string
     pk.pack("type");
     pk.pack(type);
     pk.pack("seq");
-    pk.pack(1);
+    pk.pack(seq);
     pk.pack("token");
     pk.pack("tok");
     pk.pack("body");
@@ -116,11 +116,27 @@ TEST_CASE("a refusal names the offending message's seq where it could be read, e
         return std::uint64_t{999};
     };
     auto hb = [](Packer& pk) { pk.pack_map(1); pk.pack("progress"); pk.pack(1); };
-    CHECK(seq_of(envelope([](Packer& pk) { pk.pack_map(0); })) == 1);  // envelope() packs seq 1
-    CHECK(seq_of(envelope(hb, "DANCE")) == 1);
-    CHECK(seq_of(envelope(hb, "HEARTBEAT", kProtocolVersion + 1)) == 1);
-    CHECK(seq_of(envelope(hb, "HEARTBEAT", kProtocolVersion, true)) == 1);
+    const std::uint64_t seq = 77;  // unlike v (1), so that reading the wrong field shows
+    CHECK(seq_of(envelope([](Packer& pk) { pk.pack_map(0); }, "HEARTBEAT", kProtocolVersion, false, seq)) == seq);
+    CHECK(seq_of(envelope(hb, "DANCE", kProtocolVersion, false, seq)) == seq);
+    CHECK(seq_of(envelope(hb, "HEARTBEAT", kProtocolVersion + 1, false, seq)) == seq);
+    CHECK(seq_of(envelope(hb, "HEARTBEAT", kProtocolVersion, true, seq)) == seq);
     CHECK(seq_of(std::string("\xc1 not msgpack")) == 0);
+    // A malformed HEARTBEAT or ERROR is not a request: the refusal says so, and nobody answers it.
+    auto refusal = [](const std::string& bytes) {
+        try {
+            decode(bytes.data(), bytes.size());
+        } catch (const ProtocolError& e) {
+            return e;
+        }
+        return ProtocolError("none", "accepted", 0, "");
+    };
+    const auto bad_heartbeat = refusal(envelope([](Packer& pk) { pk.pack_map(0); }, "HEARTBEAT", kProtocolVersion, false, seq));
+    CHECK(bad_heartbeat.type_name() == "HEARTBEAT");
+    CHECK_FALSE(bad_heartbeat.answerable());
+    CHECK_FALSE(refusal(envelope([](Packer& pk) { pk.pack_map(0); }, "ERROR", kProtocolVersion, false, seq)).answerable());
+    CHECK(refusal(envelope([](Packer& pk) { pk.pack_map(0); }, "ADVANCE", kProtocolVersion, false, seq)).answerable());
+    CHECK(refusal(std::string("\xc1 not msgpack")).answerable());
     msgpack::sbuffer buf;
     Packer pk(buf);
     pk.pack_map(1);

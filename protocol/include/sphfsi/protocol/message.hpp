@@ -84,14 +84,19 @@ struct Message {
 class ProtocolError : public CodedError {
 public:
     using CodedError::CodedError;
-    ProtocolError(std::string code, const std::string& message, std::uint64_t seq)
-        : CodedError(std::move(code), message), seq_(seq) {}
+    ProtocolError(std::string code, const std::string& message, std::uint64_t seq, std::string type_name)
+        : CodedError(std::move(code), message), seq_(seq), type_name_(std::move(type_name)) {}
     // The offending message's envelope seq where it could be read, else 0: the ERROR answering it carries
     // it as seq and in_reply_to (docs/protocol.md, "Envelope").
     std::uint64_t seq() const { return seq_; }
+    // Its envelope type as written, where it could be read, else empty: a malformed HEARTBEAT or ERROR is
+    // not answered (docs/protocol.md, "Errors").
+    const std::string& type_name() const { return type_name_; }
+    bool answerable() const { return type_name_ != "HEARTBEAT" && type_name_ != "ERROR"; }
 
 private:
     std::uint64_t seq_ = 0;
+    std::string type_name_;
 };
 
 template <class T>
