@@ -117,6 +117,7 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
     info["h"] = Value(sim_->h());
     info["support_radius"] = Value(sim_->support());
     info["particle_mass"] = Value(sim_->mass());
+    info["rho0"] = Value(settings_.rho0);  // the reference density the record's density errors are taken against
     info["c0"] = Value(sim_->c0());
     info["pressure_model"] = Value(to_string(settings_.pressure));
     info["density_method"] = Value(to_string(settings_.density));

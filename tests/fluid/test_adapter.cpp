@@ -4,7 +4,9 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <functional>
 #include <random>
+#include <string>
 
 #include "run_helpers.hpp"
 #include "scenes.hpp"
@@ -95,6 +97,26 @@ TEST_SUITE("adapter") {
             step(*s, 0.02);
             CHECK(s->snapshot() == b);
         }
+    }
+
+    TEST_CASE("RESTORE before any SAVE and ADVANCE from another time are bad_state (docs/protocol.md)") {
+        auto code_of = [](const std::function<void()>& f) -> std::string {
+            try {
+                f();
+            } catch (const sphfsi::protocol::SolverError& e) {
+                return e.code();
+            }
+            return "accepted";
+        };
+        auto s = start(small_dam_break("wcsph"));
+        CHECK(code_of([&] { s->restore(); }) == "bad_state");
+        Progress progress;
+        AdvanceRequest req;
+        req.t = 0.5;  // the fluid is at t = 0
+        req.dt = 0.01;
+        CHECK(code_of([&] { s->advance(req, progress); }) == "bad_state");
+        req.t = 0.0;
+        CHECK(code_of([&] { s->advance(req, progress); }) == "accepted");
     }
 
     TEST_CASE("checkpoint resume is bit-identical") {
