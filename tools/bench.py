@@ -93,15 +93,19 @@ def coupled_row(bin_dir, repeats, spin_us, overrides, end_time):
 def main():
     args = sys.argv[1:]
     # Anything but the documented options (--help included) prints the usage instead of starting a long run.
+    valid = {"--bin": lambda v: True, "--repeats": lambda v: v.isdigit() and int(v) > 0,
+             "--only": lambda v: v in ("fluid", "pcisph", "coupled")}
     i = 0
     while i < len(args):
-        if args[i] in ("--bin", "--repeats", "--only") and i + 1 < len(args):
+        if args[i] in valid and i + 1 < len(args) and valid[args[i]](args[i + 1]):
             i += 2
         elif args[i] == "--quick":
             i += 1
+        elif args[i] in ("-h", "--help"):
+            print(__doc__)
+            sys.exit(0)
         else:
-            print(__doc__, file=sys.stderr)
-            sys.exit(0 if args[i] in ("-h", "--help") else 2)
+            sys.exit(__doc__)  # status 1, the usage on stderr
     opt = lambda name, default: args[args.index(name) + 1] if name in args else default
     bin_dir = os.path.abspath(opt("--bin", os.path.join(ROOT, "build", "bin")))
     repeats = int(opt("--repeats", "5"))

@@ -147,8 +147,9 @@ int main(int argc, char** argv) {
     if (argc > 2 && std::strcmp(argv[1], "--echo") == 0) return echo(argv[2]);
     const int repeats = argc > 1 ? std::atoi(argv[1]) : 2000;
     if (argc > 2 || repeats <= 0) {  // --help too: print the usage rather than run a benchmark nobody asked for
-        std::fprintf(stderr, "usage: %s [REPEATS (default 2000)]\n", argv[0]);
-        return 2;
+        const bool help = argc == 2 && (std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0);
+        std::fprintf(help ? stdout : stderr, "usage: %s [REPEATS > 0 (default 2000)]\n", argv[0]);
+        return help ? 0 : 2;
     }
     std::printf("round trips between two processes on 127.0.0.1, %d repeats\n", repeats);
     std::printf("%-44s %10s %10s\n", "exchange", "median us", "p90 us");

@@ -84,10 +84,11 @@ int main(int argc, char** argv) {
         if (!v.empty() && a == "--sizes") sizes = split(v);
         else if (!v.empty() && a == "--threads") threads = split(v);
         else if (!v.empty() && a == "--models") models = split(v);
-        else if (!v.empty() && a == "--steps") steps = std::atoi(v.c_str());
+        else if (!v.empty() && a == "--steps" && std::atoi(v.c_str()) > 0) steps = std::atoi(v.c_str());
         else {
-            std::fprintf(stderr, "usage: %s [--sizes 10k,40k,160k] [--threads 1,2] [--models wcsph,pcisph,standard] [--steps N]\n", argv[0]);
-            return 2;
+            const bool help = a == "--help" || a == "-h";
+            std::fprintf(help ? stdout : stderr, "usage: %s [--sizes 10k,40k,160k] [--threads 1,2] [--models wcsph,pcisph,standard] [--steps N > 0]\n", argv[0]);
+            return help ? 0 : 2;
         }
     }
     std::printf("%-9s %7s %9s %9s %7s %7s %9s %14s %10s %10s\n", "model", "threads", "fluid", "particles", "steps", "iters",
