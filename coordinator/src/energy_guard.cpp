@@ -15,6 +15,12 @@ std::optional<double> stats_sum(const protocol::AdvanceReply& r, const char* a, 
     return x->as_double() + y->as_double();
 }
 
+// What both energy checks advise: under an implicit scheme the converged window is the structure's
+// backward-Euler step carrying the fluid's added mass (docs/coupling.md, "A light structure").
+constexpr const char* light_structure_remedy =
+    "an implicit scheme (coupling.scheme) with one backward-Euler structure step per window "
+    "(coupling.structure_steps) may hold";
+
 [[noreturn]] void diverged(std::uint64_t window, double t, const std::string& what) {
     std::ostringstream s;
     s << "coupling diverged: window " << window << ", t = " << t << " s: " << what;
@@ -41,8 +47,8 @@ void account_energy(const EnergyLimits& limits, std::uint64_t window, double t, 
           << "coupling.max_created_energy = " << limits.max_created << " times the fluid's mechanical energy ("
           << s.fluid_energy << " J/m); in this window most at interface vertex " << v << " ("
           << s.mesh.vertices.values[2 * v] << ", " << s.mesh.vertices.values[2 * v + 1] << ") m. An explicit "
-          << "scheme does this when the structure is light for the fluid on it (added mass): an implicit scheme "
-          << "(coupling.scheme) with one backward-Euler structure step per window (coupling.structure_steps) may hold";
+          << "scheme does this when the structure is light for the fluid on it (added mass): "
+          << light_structure_remedy;
         diverged(window, t, m.str());
     }
 
@@ -57,8 +63,7 @@ void account_energy(const EnergyLimits& limits, std::uint64_t window, double t, 
           << s.fluid_energy << " J/m); with no external work they can only lose energy. An explicit scheme "
           << "does this under a light structure (added mass), also through the wall velocity when it has no "
           << "predictor (coupling.predictor); so does an implicit one whose structure sub-steps its own swings within a "
-          << "window: an implicit scheme (coupling.scheme) with one backward-Euler structure step per window "
-          << "(coupling.structure_steps) may hold";
+          << "window: " << light_structure_remedy;
         diverged(window, t, m.str());
     }
 }

@@ -60,6 +60,11 @@ def compressibility():
     save(fig, "compressibility.png")
 
 
+def mass_ratio(r):
+    """rho_s t / (rho_f L) of an added-mass run: plate 0.02 m thick and 0.2 m long under water."""
+    return num(r["structure.material.rho"]) * 0.02 / (1000 * 0.2)
+
+
 def added_mass():
     rs = rows("added_mass.csv")
     methods = []
@@ -73,8 +78,8 @@ def added_mass():
         # Line style by window and structure step: the thesis window sub-cycling the structure (solid),
         # multi-rate windows (dashed), one structure step per window (dash-dotted).
         style = "--" if "multi-rate" in m else "-." if " step" in m else "-"
-        sel = sorted((r for r in rs if r["method"] == m), key=lambda r: num(r["structure.material.rho"]))
-        ratio = [num(r["structure.material.rho"]) * 0.02 / (1000 * 0.2) for r in sel]
+        sel = sorted((r for r in rs if r["method"] == m), key=mass_ratio)
+        ratio = [mass_ratio(r) for r in sel]
         ok = [r["status"] == "completed" for r in sel]
         dev = [num(r["mid.max_rel"]) for r in sel]
         it = [num(r["iterations.value"]) for r in sel]
@@ -89,10 +94,10 @@ def added_mass():
     # The explicit scheme's failure point, sub-cycled structure and one structure step per window: between
     # its last stable ratio and the first unstable one (max |u - w| > |w| or a failed run), on both panels.
     for explicit, ls, y in (("serial-explicit", ":", 0.9), ("serial-explicit, one BE step", "-.", 0.7)):
-        expl = sorted((r for r in rs if r["method"] == explicit), key=lambda r: -num(r["structure.material.rho"]))
+        expl = sorted((r for r in rs if r["method"] == explicit), key=lambda r: -mass_ratio(r))
         last_ok = None
         for r in expl:
-            x = num(r["structure.material.rho"]) * 0.02 / (1000 * 0.2)
+            x = mass_ratio(r)
             if r["status"] != "completed" or num(r["mid.max_rel"]) > 1.0:
                 edge = math.sqrt(x * last_ok) if last_ok else x
                 for ax in axes:
