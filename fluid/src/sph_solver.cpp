@@ -134,10 +134,7 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
 protocol::AdvanceReply SphSolver::advance(const protocol::AdvanceRequest& request, protocol::Progress& progress) {
     require_init();
     const double t = sim_->time();
-    if (std::abs(request.t - t) > 1e-9 * std::max(1.0, std::abs(t)))
-        throw SolverError("bad_state", "ADVANCE starts at t = " + std::to_string(request.t) + " s but the fluid is at t = " +
-                                          std::to_string(t) + " s");
-    if (!(request.dt > 0.0)) throw SolverError("internal", "ADVANCE with a window length that is not > 0");
+    protocol::check_window(request, t, "fluid");
     if (coupling_) {
         try {
             coupling_->begin_window(t, request.dt, find_f64(request.inputs, "displacement"),

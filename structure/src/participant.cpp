@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <numbers>
-#include <sstream>
 
 #include "sphfsi/structure/checkpoint.hpp"
 #include "sphfsi/structure/schema.hpp"
@@ -10,15 +9,6 @@
 namespace sphfsi::structure {
 
 using namespace sphfsi::protocol;
-
-namespace {
-std::string num(double x) {
-    std::ostringstream s;
-    s.precision(12);
-    s << x;
-    return s.str();
-}
-}  // namespace
 
 const schema::TableSchema& StructureSolver::schema() const { return scene_schema(); }
 
@@ -66,10 +56,7 @@ InitReply StructureSolver::init(const InitRequest& request) {
 AdvanceReply StructureSolver::advance(const AdvanceRequest& request, Progress& progress) {
     FrameDynamics& d = dyn();
     const double t0 = d.state().t;
-    if (!(request.dt > 0) || !std::isfinite(request.dt))
-        throw SolverError("internal", "structure: ADVANCE with dt = " + num(request.dt));
-    if (std::abs(request.t - t0) > 1e-9 * std::max(request.dt, std::abs(t0)))
-        throw SolverError("bad_state", "structure: ADVANCE from t=" + num(request.t) + " but the structure is at t=" + num(t0));
+    protocol::check_window(request, t0, "structure");
 
     std::uint32_t n = request.substeps;
     if (n == 0) n = static_cast<std::uint32_t>(std::max(1.0, std::ceil(request.dt / dt_wanted_ * (1.0 - 1e-12))));

@@ -62,6 +62,13 @@ struct AdvanceReply {
     double compute_s = 0.0;               // wall seconds inside Solver::advance (set by the runtime)
 };
 
+// The checks every solver applies to an ADVANCE before stepping (docs/protocol.md §3): the window length
+// is finite and > 0 (else `internal`: the coordinator never sends one), and the window starts at the
+// solver's current time `now` to 1e-9 relative (else `bad_state`). "Relative" is to the larger of |now| and
+// the window length, so a window that starts at t = 0 is judged against its own size. `who` names the
+// solver in the message. One function so that every participant reads the rule the same way.
+void check_window(const AdvanceRequest& request, double now, const std::string& who);
+
 // Progress counter the heartbeat thread reports; a solver bumps it once per sub-step.
 struct Progress {
     std::atomic<std::uint64_t> steps{0};

@@ -1,0 +1,26 @@
+#include "sphfsi/protocol/solver.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace sphfsi::protocol {
+
+namespace {
+std::string seconds(double t) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.9g s", t);
+    return buf;
+}
+}  // namespace
+
+void check_window(const AdvanceRequest& request, double now, const std::string& who) {
+    if (!(request.dt > 0.0) || !std::isfinite(request.dt))
+        throw SolverError("internal", who + ": ADVANCE with a window length dt = " + seconds(request.dt) +
+                                          ", which is not finite and > 0");
+    if (!(std::abs(request.t - now) <= 1e-9 * std::max(std::abs(now), request.dt)))
+        throw SolverError("bad_state", who + ": ADVANCE starts at t = " + seconds(request.t) + " but the " + who +
+                                           " is at t = " + seconds(now));
+}
+
+}  // namespace sphfsi::protocol

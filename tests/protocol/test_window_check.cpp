@@ -1,0 +1,57 @@
+// protocol::check_window: the ADVANCE rule of docs/protocol.md §3 that every solver applies (a window starts
+// at the solver's time to 1e-9 x max(|now|, dt); its length is finite and > 0).
+#include <doctest/doctest.h>
+
+#include <limits>
+#include <string>
+
+#include "sphfsi/protocol/solver.hpp"
+
+using namespace sphfsi::protocol;
+
+namespace {
+AdvanceRequest window(double t, double dt) {
+    AdvanceRequest r;
+    r.t = t;
+    r.dt = dt;
+    return r;
+}
+
+// The code the check throws, "" when it accepts the window.
+std::string verdict(double t, double dt, double now) {
+    try {
+        check_window(window(t, dt), now, "solver");
+    } catch (const SolverError& e) {
+        return e.code();
+    }
+    return "";
+}
+}  // namespace
+
+TEST_CASE("check_window accepts a window at the solver's time, within round-off") {
+    CHECK(verdict(0.0, 1e-4, 0.0) == "");
+    CHECK(verdict(0.3 + 1e-12, 1e-4, 0.3) == "");    // 3.3e-12 relative to now: summed window lengths
+    CHECK(verdict(5e-14, 1e-4, 0.0) == "");          // at t = 0 the tolerance is relative to dt (1e-13 here)
+}
+
+TEST_CASE("check_window refuses a window that starts elsewhere with bad_state, naming both times") {
+    CHECK(verdict(0.5, 1e-3, 0.0) == "bad_state");
+    CHECK(verdict(2e-13, 1e-4, 0.0) == "bad_state");  // beyond 1e-9 x dt at t = 0
+    CHECK(verdict(0.3 + 1e-9, 1e-4, 0.3) == "bad_state");
+    try {
+        check_window(window(0.25, 1e-3), 0.125, "fluid");
+        FAIL("no error");
+    } catch (const SolverError& e) {
+        const std::string m = e.what();
+        CHECK(m.find("fluid") != std::string::npos);
+        CHECK(m.find("0.25") != std::string::npos);
+        CHECK(m.find("0.125") != std::string::npos);
+    }
+}
+
+TEST_CASE("check_window refuses a window length that is not finite and > 0") {
+    CHECK(verdict(0.0, 0.0, 0.0) == "internal");
+    CHECK(verdict(0.0, -1e-3, 0.0) == "internal");
+    CHECK(verdict(0.0, std::numeric_limits<double>::quiet_NaN(), 0.0) == "internal");
+    CHECK(verdict(0.0, std::numeric_limits<double>::infinity(), 0.0) == "internal");
+}
