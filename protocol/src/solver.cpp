@@ -15,9 +15,11 @@ std::string seconds(double t) {
 }  // namespace
 
 void check_window(const AdvanceRequest& request, double now, const std::string& who) {
+    if (!std::isfinite(request.t))
+        throw SolverError("bad_message", who + ": ADVANCE t = " + seconds(request.t) + " is not a finite time");
     if (!(request.dt > 0.0) || !std::isfinite(request.dt))
-        throw SolverError("internal", who + ": ADVANCE with a window length dt = " + seconds(request.dt) +
-                                          ", which is not finite and > 0");
+        throw SolverError("bad_message", who + ": ADVANCE dt = " + seconds(request.dt) +
+                                             " is not a finite window length > 0");
     if (!(std::abs(request.t - now) <= 1e-9 * std::max(std::abs(now), request.dt)))
         throw SolverError("bad_state", who + ": ADVANCE starts at t = " + seconds(request.t) + " but the " + who +
                                            " is at t = " + seconds(now));

@@ -89,6 +89,9 @@ def test_runtime_answers_as_the_protocol_document_says():
         # RESTORE before any SAVE, and ADVANCE from a time that is not the participant's: bad_state.
         expect_error(c.request("RESTORE", 9, {}), 9, "bad_state")
         expect_error(c.request("ADVANCE", 10, dict(advance, t=0.5)), 10, "bad_state")
+        # A window length that is not > 0, or a start that is not finite, is out of range: bad_message.
+        expect_error(c.request("ADVANCE", 10, dict(advance, dt=0.0)), 10, "bad_message")
+        expect_error(c.request("ADVANCE", 10, dict(advance, t=float("nan"))), 10, "bad_message")
         # And the participant is still well: it advances, then leaves on BYE with status 0.
         advanced = c.request("ADVANCE", 11, advance)
         assert advanced["type"] == "ADVANCED" and abs(advanced["body"]["t"] - 1e-3) < 1e-15, advanced

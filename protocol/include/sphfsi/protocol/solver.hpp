@@ -62,9 +62,9 @@ struct AdvanceReply {
     double compute_s = 0.0;               // wall seconds inside Solver::advance (set by the runtime)
 };
 
-// The checks every solver applies to an ADVANCE before stepping (docs/protocol.md §3): the window length
-// is finite and > 0 (else `internal`: the coordinator never sends one), and the window starts at the
-// solver's current time `now` to 1e-9 relative (else `bad_state`). "Relative" is to the larger of |now| and
+// The checks every solver applies to an ADVANCE before stepping (docs/protocol.md §3): `t` is finite and
+// the window length `dt` finite and > 0 (else `bad_message`, as for any field out of its range), and the
+// window starts at the solver's current time `now` to 1e-9 relative (else `bad_state`). "Relative" is to the larger of |now| and
 // the window length, so a window that starts at t = 0 is judged against its own size. `who` names the
 // solver in the message. One function so that every participant reads the rule the same way.
 void check_window(const AdvanceRequest& request, double now, const std::string& who);
