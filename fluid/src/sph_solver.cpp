@@ -1,6 +1,5 @@
 #include "sphfsi/fluid/sph_solver.hpp"
 
-#include <cmath>
 #include <stdexcept>
 
 #include <omp.h>

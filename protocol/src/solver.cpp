@@ -8,8 +8,8 @@ namespace sphfsi::protocol {
 
 namespace {
 std::string seconds(double t) {
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.9g s", t);
+    char buf[48];
+    std::snprintf(buf, sizeof buf, "%.17g s", t);  // every digit: a refusal may be 1e-9 away
     return buf;
 }
 }  // namespace

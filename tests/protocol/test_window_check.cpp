@@ -1,5 +1,5 @@
 // protocol::check_window: the ADVANCE rule of docs/protocol.md §3 that every solver applies (a window starts
-// at the solver's time to 1e-9 x max(|now|, dt); t is finite and the length finite and > 0).
+// at the solver's time to 1e-9 x max(|now|, dt); t is finite and the length a finite number > 0).
 #include <doctest/doctest.h>
 
 #include <limits>
@@ -49,7 +49,7 @@ TEST_CASE("check_window refuses a window that starts elsewhere with bad_state, n
     }
 }
 
-TEST_CASE("check_window refuses a start that is not finite and a length that is not finite and > 0 as bad_message") {
+TEST_CASE("check_window refuses a start that is not finite, or a length that is not a finite number > 0, as bad_message") {
     const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
     CHECK(verdict(0.0, 0.0, 0.0) == "bad_message");
     CHECK(verdict(0.0, -1e-3, 0.0) == "bad_message");

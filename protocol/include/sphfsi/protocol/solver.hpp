@@ -24,8 +24,9 @@ private:
     std::string code_;
 };
 
-// A solver failure that ends the run: blow-up, non-convergence, bad configuration ("diverged",
-// "not_converged", "bad_config", "internal").
+// An error a solver raises: a failure that ends the run (blow-up, non-convergence, bad configuration:
+// "diverged", "not_converged", "bad_config", "internal") or a request it refuses ("bad_state",
+// "bad_message": check_window below, RESTORE before SAVE).
 class SolverError : public CodedError {
 public:
     using CodedError::CodedError;
