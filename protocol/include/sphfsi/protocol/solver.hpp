@@ -64,10 +64,10 @@ struct AdvanceReply {
 };
 
 // The checks every solver applies to an ADVANCE before stepping (docs/protocol.md §3): `t` is finite and
-// the window length `dt` finite and > 0 (else `bad_message`, as for any field out of its range), and the
-// window starts at the solver's current time `now` to 1e-9 relative (else `bad_state`). "Relative" is to the larger of |now| and
-// the window length, so a window that starts at t = 0 is judged against its own size. `who` names the
-// solver in the message. One function so that every participant reads the rule the same way.
+// the window length `dt` a finite number > 0 (else `bad_message`, as for any field out of its range), and
+// the window starts at the solver's current time `now` to 1e-9 x max(|now|, dt) (else `bad_state`): relative
+// to the window's own length when it starts at t = 0. `who` names the solver in the message. One function,
+// so that every participant reads the rule the same way.
 void check_window(const AdvanceRequest& request, double now, const std::string& who);
 
 // Progress counter the heartbeat thread reports; a solver bumps it once per sub-step.
