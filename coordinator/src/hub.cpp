@@ -177,7 +177,7 @@ void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) 
         if (!e.answerable()) return log_("ignored a malformed " + e.type_name() + " from an unknown connection");
         return refuse(e.seq(), e.code(), std::string("malformed first message: ") + e.what());
     }
-    if (m.type == MessageType::Error || m.type == MessageType::Heartbeat)  // not requests: never answered
+    if (!is_answered(m.type))
         return log_("ignored " + std::string(to_string(m.type)) + " from an unknown connection");
     if (m.type != MessageType::Hello) return refuse(m.seq, "refused", "first message must be HELLO, got " + std::string(to_string(m.type)));
     if (m.token != token_) return refuse(m.seq, "bad_token", "HELLO carries a token that is not this run's (stale or stray participant)");

@@ -194,12 +194,11 @@ private:
                 if (e.answerable()) reply_error(e.seq(), e.code(), e.what());
                 continue;
             }
-            // HEARTBEAT and ERROR are not requests and are never answered, whatever their token: answering an
-            // ERROR could start a ping-pong of ERRORs.
-            if (m.type == MessageType::Heartbeat) continue;
-            if (m.type == MessageType::Error) {
-                const auto& e = m.as<ErrorReply>();
-                log("the coordinator sent ERROR " + e.code + ": " + e.message);
+            if (!is_answered(m.type)) {  // HEARTBEAT or ERROR, whatever its token
+                if (m.type == MessageType::Error) {
+                    const auto& e = m.as<ErrorReply>();
+                    log("the coordinator sent ERROR " + e.code + ": " + e.message);
+                }
                 continue;
             }
             if (m.token != opt_.token) {

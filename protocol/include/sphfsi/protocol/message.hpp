@@ -22,6 +22,9 @@ enum class MessageType {
 };
 std::string_view to_string(MessageType t);
 bool parse_message_type(std::string_view name, MessageType& out);
+// HEARTBEAT and ERROR are not requests: they are never answered, malformed or not, whatever their token
+// (docs/protocol.md, "Errors"); answering an ERROR could start a ping-pong of ERRORs.
+inline bool is_answered(MessageType t) { return t != MessageType::Heartbeat && t != MessageType::Error; }
 
 struct Hello {                       // participant -> coordinator, first message
     std::string name;                // role in the scene: "fluid" or "structure"
@@ -92,7 +95,10 @@ public:
     // Its envelope type as written, where it could be read, else empty: a malformed HEARTBEAT or ERROR is
     // not answered (docs/protocol.md, "Errors").
     const std::string& type_name() const { return type_name_; }
-    bool answerable() const { return type_name_ != "HEARTBEAT" && type_name_ != "ERROR"; }
+    bool answerable() const {
+        MessageType t;
+        return !parse_message_type(type_name_, t) || is_answered(t);
+    }
 
 private:
     std::uint64_t seq_ = 0;
