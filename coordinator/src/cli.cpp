@@ -37,6 +37,7 @@ int main_cli(int argc, char** argv) {
     const std::string command = args[0];
     RunOptions opt;
     std::string scene;
+    bool out_given = false;
     for (std::size_t i = 1; i < args.size(); ++i) {
         const std::string& a = args[i];
         auto value = [&]() -> const std::string* { return i + 1 < args.size() ? &args[++i] : nullptr; };
@@ -48,6 +49,7 @@ int main_cli(int argc, char** argv) {
             auto v = value();
             if (!v) return usage_error("--out needs a directory");
             opt.out_dir = *v;
+            out_given = true;
         } else if (a == "--listen") {
             auto v = value();
             if (!v) return usage_error("--listen needs an endpoint such as tcp://127.0.0.1:5555");
@@ -91,6 +93,10 @@ int main_cli(int argc, char** argv) {
     if (command == "run") {
         if (!opt.resume && scene.empty()) return usage_error("run needs a scene file (or --resume DIR)");
         if (opt.resume && !scene.empty()) return usage_error("--resume takes the scene from the checkpoint; give no scene");
+        // A resumed run must continue the interrupted one exactly, in its own directory.
+        if (opt.resume && !opt.overrides.empty())
+            return usage_error("--resume continues the run as it was; --set cannot change it (start a new run instead)");
+        if (opt.resume && out_given) return usage_error("--resume DIR resumes in DIR; give no --out");
         if (opt.out_dir.empty()) return usage_error("run needs --out DIR");
         opt.scene = scene;
         return run_scene(opt);

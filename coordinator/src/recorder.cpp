@@ -36,16 +36,25 @@ Recorder::Recorder(std::filesystem::path file, const RunMetadata& meta, std::opt
         flush();
         return;
     }
-    // The interrupted run may have been killed in the middle of a write, so its file is not appended
-    // to: what it holds up to the checkpoint is copied into a fresh file, and the run goes on there.
+    // The interrupted run may have been killed in the middle of a write, so its file is not appended to:
+    // what it holds up to the checkpoint is copied into a new file beside it, which then replaces it in one
+    // rename and takes the rest of the run. Killed before the rename, a resume leaves record.h5 as it was
+    // (and a stale record.h5.resuming, replaced by the next try); after it, record.h5 holds the history and
+    // everything since. Builds before 2026-11-25 renamed record.h5 to record.h5.interrupted first, so a resume
+    // of theirs that died left the history in that file: refuse to guess which file is whole.
     auto interrupted = file_;
     interrupted += ".interrupted";
-    std::filesystem::rename(file_, interrupted);
-    h5_ = h5::create_file(file_.string());
-    copy_history(interrupted, *resume_at);
-    std::filesystem::remove(interrupted);
+    if (std::filesystem::exists(interrupted))
+        throw std::runtime_error(interrupted.string() + " is left from a resume that did not finish and may hold history that " +
+                                 file_.string() + " lacks: keep the file you want as " + file_.filename().string() +
+                                 ", remove the other, and resume again");
+    auto resuming = file_;
+    resuming += ".resuming";
+    h5_ = h5::create_file(resuming.string());
+    copy_history(file_, *resume_at);
     set_status("running (resumed)");
     flush();
+    std::filesystem::rename(resuming, file_);  // the open handle follows the file: it is the same inode
 }
 
 // Copies the interrupted run's record up to time `until`: the scene, participants and root attributes

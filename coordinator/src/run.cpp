@@ -14,6 +14,7 @@
 
 #include "sphfsi/coordinator/checkpoint.hpp"
 #include "sphfsi/coordinator/coupling.hpp"
+#include "sphfsi/coordinator/dir_lock.hpp"
 #include "sphfsi/coordinator/energy_guard.hpp"
 #include "sphfsi/coordinator/git_revision.hpp"
 #include "sphfsi/coordinator/hub.hpp"
@@ -87,6 +88,7 @@ private:
     void checkpoint();
 
     RunOptions opt_;
+    std::unique_ptr<DirLock> lock_;  // declared first, released last: after the record's final flush
     Scene scene_;
     std::ofstream log_file_;
     std::unique_ptr<Launcher> launcher_;
@@ -125,11 +127,13 @@ int Runner::execute() {
         resume = read_checkpoint(opt_.out_dir / "checkpoint.bin");
         // The scene as the run saw it, not as the file may read now; paths stay relative to the original.
         scene_ = parse_scene(resume->scene_text, resume->scene_file, resume->overrides);
+        t_ = resume->t;  // an interruption before INIT completes is reported at the checkpoint's time
     } else {
         scene_ = load_scene(opt_.scene, opt_.overrides);
         scene_.file = std::filesystem::absolute(opt_.scene);
     }
     std::filesystem::create_directories(opt_.out_dir);  // only once the scene is known to be valid
+    lock_ = std::make_unique<DirLock>(opt_.out_dir);
     log_file_.open(opt_.out_dir / "run.log", resume ? std::ios::app : std::ios::trunc);
     const Value& run = scene_.section("run");
     fluid_ = scene_.has("fluid");

@@ -13,9 +13,8 @@ SCENE = os.path.join(harness.ROOT, "scenarios", "beam_only.toml")
 SETTINGS = ["--set", "run.end_time=3.0", "--set", "run.checkpoint_interval=0.5", "--set", "run.output_interval=0.05"]
 
 
-def killed_after_first_checkpoint(scene, settings, name):
-    """Starts the scene, SIGKILLs the coordinator as soon as a checkpoint exists, resumes it to the end;
-    returns the output folder."""
+def kill_after_first_checkpoint(scene, settings, name):
+    """Starts the scene and SIGKILLs the coordinator as soon as a checkpoint exists; returns the output folder."""
     cut = harness.out_dir(name)
     run = harness.Running("run", scene, "--out", cut, "--quiet", *settings)
     checkpoint = os.path.join(cut, "checkpoint.bin")
@@ -25,6 +24,12 @@ def killed_after_first_checkpoint(scene, settings, name):
     assert os.path.exists(checkpoint), "no checkpoint was written"
     run.proc.send_signal(signal.SIGKILL)
     run.proc.wait(timeout=10)
+    return cut
+
+
+def killed_after_first_checkpoint(scene, settings, name):
+    """kill_after_first_checkpoint, then resumed to the end; returns the output folder."""
+    cut = kill_after_first_checkpoint(scene, settings, name)
     code, text = harness.sphfsi("run", "--resume", cut, "--quiet", timeout=240)
     assert code == 0, text
     assert "resumed at t = " in text, text
@@ -73,6 +78,56 @@ def test_resumed_coupled_run_matches_uninterrupted_run():
             err = np.abs(x - y).max() / max(np.abs(x).max(), 1e-300)
             print(f"{path}: final frames differ by {err:.1e} relative")
             assert err <= 1e-10, path
+
+
+def fluid_history(out, until):
+    """The fluid frames' times and positions up to time `until`, from out/record.h5 (which must open)."""
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        times = f["frames/fluid/time"][:]
+        keep = int(np.count_nonzero(times <= until * (1 + 1e-12)))
+        return times[:keep], f["frames/fluid/position"][:keep]
+
+
+def test_a_resume_stopped_at_any_moment_keeps_the_history():
+    """A resume copies the interrupted run's record up to the checkpoint into a new file and only then
+    replaces record.h5 with it. So a resume killed at any moment, and a second resume started while one
+    runs (refused: one run per output directory), leave record.h5 readable with every frame up to the
+    checkpoint. Builds before 2026-11-25 renamed record.h5 away first: a resume killed during the copy,
+    followed by another, produced a "completed" record without the first half of the run. The record here
+    is ~10 MB, so the copy takes tens of milliseconds and the kill delays below fall before, in and after it."""
+    scene = os.path.join(harness.ROOT, "scenarios", "dam_break.toml")
+    settings = ["--set", "fluid.dp=0.004", "--set", "run.end_time=0.2", "--set", "run.output_interval=0.0005",
+                "--set", "run.checkpoint_interval=0.05"]
+    cut = kill_after_first_checkpoint(scene, settings, "resume-killed")
+    checkpoint_t = 0.05
+    times, positions = fluid_history(cut, checkpoint_t)
+    assert times.size > 90 and abs(times[-1] - checkpoint_t) < 1e-9, times[-3:]
+
+    for delay in (0.0, 0.01, 0.03, 0.06, 0.1, 0.2, 0.4):
+        resume = harness.Running("run", "--resume", cut, "--quiet")
+        time.sleep(delay)
+        resume.proc.send_signal(signal.SIGKILL)
+        resume.proc.wait(timeout=10)
+        t, x = fluid_history(cut, checkpoint_t)
+        print(f"resume killed after {delay:.2f} s: {t.size} frames up to the checkpoint, as before: "
+              f"{np.array_equal(t, times) and np.array_equal(x, positions)}")
+        assert np.array_equal(t, times) and np.array_equal(x, positions), f"history lost (kill after {delay} s)"
+
+    # A resume continues the run as it was, where it was: it takes no overrides and no other folder.
+    code, text = harness.sphfsi("run", "--resume", cut, "--set", "fluid.dp=0.01")
+    assert code == 2 and "--set cannot change it" in text, text
+    code, text = harness.sphfsi("run", "--resume", cut, "--out", harness.out_dir("resume-elsewhere"))
+    assert code == 2 and "give no --out" in text, text
+
+    first = harness.Running("run", "--resume", cut, "--quiet")
+    first.wait_for("resumed at t = ", timeout=60)
+    code, text = harness.sphfsi("run", "--resume", cut, "--quiet", timeout=60)
+    assert code == 1 and "in use by another sphfsi run" in text, (code, text)
+    code, text = first.finish(timeout=120)
+    assert code == 0, text
+    t, x = fluid_history(cut, 1.0)
+    assert np.array_equal(t[:times.size], times) and np.array_equal(x[:times.size], positions)
+    assert t.size == 401 and np.all(np.diff(t) > 0) and abs(t[-1] - 0.2) < 1e-9, (t.size, t[-3:])
 
 
 if __name__ == "__main__":
