@@ -54,6 +54,7 @@ std::uint64_t Hub::send(const std::string& role, MessageType type, Body body) {
     Message m = make_message(type, ++seq_, token_, std::move(body));
     m.version = peers_.at(role).version;
     send_raw(identity_of(role), m);
+    open_[role][m.seq] = type;
     return m.seq;
 }
 
@@ -150,18 +151,51 @@ void Hub::pump(int wait_ms) {
             throw ParticipantFailure(role, "garbage", "sent a malformed message (" + e.code() + "): " + e.what());
         }
         messaging_s_ += seconds_since(start);
-        if (m.token != token_) throw ParticipantFailure(role, "garbage", "sent a message with a wrong token");
+        // Refused as docs/protocol.md says (answered unless HEARTBEAT or ERROR), then fatal: a welcomed
+        // participant that changes token or version mid-run is broken.
+        auto refusal = [&](const std::string& code, const std::string& why) {
+            if (is_answered(m.type)) send_raw(id, make_message(MessageType::Error, m.seq, token_, ErrorReply{code, why, m.seq}));
+            return ParticipantFailure(role, "garbage", why);
+        };
+        if (m.token != token_) throw refusal("bad_token", "sent a message with a wrong token");
         PeerInfo& peer = peers_[role];
         if (m.version != peer.version)
-            throw ParticipantFailure(role, "garbage", "switched protocol version to " + std::to_string(m.version));
+            throw refusal("version_mismatch", "switched protocol version to " + std::to_string(m.version));
         peer.last_seen = Clock::now();
         if (m.type == MessageType::Heartbeat) {
             peer.progress = m.as<Heartbeat>().progress;
             continue;
         }
-        inbox_[role][m.seq] = std::move(m);
+        file_reply(role, std::move(m));
     }
     check_liveness();
+}
+
+// Every message but a HEARTBEAT must answer a request this hub sent the participant and has not had an
+// answer to, with that request's reply type or ERROR. Anything else (a wrong or repeated seq, a reply sent
+// ahead of its request, the wrong reply type) would otherwise wait in the inbox for ever, or be taken as the
+// answer to a later request: both are named as garbage at once.
+void Hub::file_reply(const std::string& role, Message m) {
+    auto& open = open_[role];
+    auto request = open.find(m.seq);
+    if (request == open.end()) {
+        if (m.type == MessageType::Error) {  // e.g. seq 0: it could not read our request; its words still count
+            const auto& e = m.as<ErrorReply>();
+            throw ParticipantFailure(role, e.code, "reported " + e.code + ": " + e.message);
+        }
+        std::string open_list;
+        for (const auto& [seq, type] : open) open_list += (open_list.empty() ? "" : ", ") + std::string(to_string(type)) + " " + std::to_string(seq);
+        throw ParticipantFailure(role, "garbage", "sent " + std::string(to_string(m.type)) + " with seq " + std::to_string(m.seq) +
+                                                      ", which answers no open request (open: " +
+                                                      (open_list.empty() ? "none" : open_list) + ")");
+    }
+    const MessageType expected = expected_reply(request->second);
+    if (m.type != expected && m.type != MessageType::Error)
+        throw ParticipantFailure(role, "garbage", "answered " + std::string(to_string(request->second)) + " (seq " +
+                                                      std::to_string(m.seq) + ") with " + std::string(to_string(m.type)) +
+                                                      ", not " + std::string(to_string(expected)));
+    open.erase(request);
+    inbox_[role][m.seq] = std::move(m);
 }
 
 void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) {
@@ -191,6 +225,9 @@ void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) 
     if (std::find(expected_.begin(), expected_.end(), h.name) == expected_.end())
         return refuse(m.seq, "refused", "the scene has no participant named '" + h.name + "'");
     if (peers_.count(h.name)) return refuse(m.seq, "refused", "'" + h.name + "' is already connected");
+    // A role is what the scene needs and the kind what the program is; the roles are named after the kinds.
+    if (h.kind != h.name)
+        return refuse(m.seq, "refused", "'" + h.name + "' says it is a " + h.kind + " program (HELLO kind); the role needs a " + h.name);
     identity_role_[id] = h.name;
     role_identity_[h.name] = id;
     PeerInfo& p = peers_[h.name];

@@ -219,7 +219,6 @@ void Runner::initialise(std::optional<Checkpoint>& resume) {
         if (role == "fluid" && coupled_) req.interface = iface_.mesh;
         if (resume) req.state = resume->states.at(role);
         Message m = hub_->request(role, MessageType::Init, req);
-        if (m.type != MessageType::Ready) throw ParticipantFailure(role, "garbage", "answered INIT with " + std::string(to_string(m.type)));
         const auto& ready = m.as<InitReply>();
         if (role == "structure") {
             // A structure alone may have no wetted surface; coupled, the fluid needs one to push on.
@@ -406,8 +405,10 @@ void Runner::record_window(const WindowPlan& p, const WindowOutcome& o, double w
 void Runner::snapshot_all() {
     for (const auto& role : roles_) {
         Message m = hub_->request(role, MessageType::Snapshot);
-        if (m.type != MessageType::Frame) throw ParticipantFailure(role, "garbage", "answered SNAPSHOT with " + std::string(to_string(m.type)));
-        recorder_->append_frame(role, t_, m.as<Frame>().fields);
+        const Frame& frame = m.as<Frame>();
+        if (!same_instant(frame.t, t_, output_dt_))
+            throw ParticipantFailure(role, "garbage", "sent a FRAME of t = " + seconds(frame.t) + " at t = " + seconds(t_));
+        recorder_->append_frame(role, t_, frame.fields);
     }
     if (watchpoints_) watchpoints_->flush();
     ++output_index_;
@@ -428,8 +429,12 @@ void Runner::checkpoint() {
     c.interface = iface_;
     for (const auto& role : roles_) {
         Message m = hub_->request(role, MessageType::Checkpoint);
-        if (m.type != MessageType::State) throw ParticipantFailure(role, "garbage", "answered CHECKPOINT with " + std::string(to_string(m.type)));
-        c.states[role] = m.as<State>().bytes;
+        const State& state = m.as<State>();
+        if (!same_instant(state.t, t_, checkpoint_dt_))
+            throw ParticipantFailure(role, "garbage", "sent a STATE of t = " + seconds(state.t) + " at t = " + seconds(t_));
+        // INIT reads empty state bytes as "start fresh": a resume from them would silently restart at t = 0.
+        if (state.bytes.empty()) throw ParticipantFailure(role, "garbage", "sent a STATE with no bytes");
+        c.states[role] = state.bytes;
     }
     recorder_->flush();
     write_checkpoint(opt_.out_dir / "checkpoint.bin", c);

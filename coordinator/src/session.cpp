@@ -8,29 +8,35 @@ using Clock = std::chrono::steady_clock;
 
 std::uint64_t Session::start_advance(const std::string& role, double t, double dt, std::uint32_t substeps,
                                      std::uint32_t iteration, Fields inputs) {
-    started_[role] = Clock::now();
+    asked_[role] = Asked{t, dt, substeps, Clock::now()};
     return hub_.send(role, MessageType::Advance, AdvanceRequest{t, dt, substeps, iteration, std::move(inputs)});
 }
 
 StepResult Session::finish_advance(const std::string& role, std::uint64_t seq) {
     Message m = hub_.await_reply(role, seq);
-    if (m.type != MessageType::Advanced)
-        throw ParticipantFailure(role, "garbage", "answered ADVANCE with " + std::string(to_string(m.type)));
-    StepResult r{m.as<AdvanceReply>(), std::chrono::duration<double>(Clock::now() - started_[role]).count()};
+    const Asked& asked = asked_.at(role);
+    StepResult r{m.as<AdvanceReply>(), std::chrono::duration<double>(Clock::now() - asked.sent).count()};
+    // The reply must say it did what was asked: the coordinator's clock and records go by the request.
+    const double end = asked.t + asked.dt;
+    if (!same_instant(r.reply.t, end, asked.dt))
+        throw ParticipantFailure(role, "garbage", "reports reaching t = " + seconds(r.reply.t) + ", but the window ends at t = " + seconds(end));
+    if (asked.substeps > 0 ? r.reply.substeps != asked.substeps : r.reply.substeps == 0)
+        throw ParticipantFailure(role, "garbage", "reports " + std::to_string(r.reply.substeps) + " sub-steps, asked for " +
+                                                      (asked.substeps > 0 ? std::to_string(asked.substeps) : "at least 1"));
     if (!(r.reply.dt_wanted > 0) || !std::isfinite(r.reply.dt_wanted))
-        throw ParticipantFailure(role, "garbage", "wants a step of " + std::to_string(r.reply.dt_wanted) + " s");
+        throw ParticipantFailure(role, "garbage", "wants a step of " + seconds(r.reply.dt_wanted));
+    if (!(r.reply.compute_s >= 0) || !std::isfinite(r.reply.compute_s))
+        throw ParticipantFailure(role, "garbage", "reports a compute time of " + seconds(r.reply.compute_s));
+    if (r.reply.stats.is_table())
+        for (const auto& [name, value] : r.reply.stats.as_table())
+            if (!value.is_number())
+                throw ParticipantFailure(role, "garbage", "reports stats '" + name + "' that is not a number (ADVANCED stats: str -> number)");
     return r;
 }
 
-void Session::save(const std::string& role) {
-    if (hub_.request(role, MessageType::Save).type != MessageType::Ack)
-        throw ParticipantFailure(role, "garbage", "did not ACK SAVE");
-}
+void Session::save(const std::string& role) { hub_.request(role, MessageType::Save); }
 
-void Session::restore(const std::string& role) {
-    if (hub_.request(role, MessageType::Restore).type != MessageType::Ack)
-        throw ParticipantFailure(role, "garbage", "did not ACK RESTORE");
-}
+void Session::restore(const std::string& role) { hub_.request(role, MessageType::Restore); }
 
 void InterfaceState::reset(const InterfaceMesh& m) {
     mesh = m;

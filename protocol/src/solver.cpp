@@ -6,13 +6,15 @@
 
 namespace sphfsi::protocol {
 
-namespace {
 std::string seconds(double t) {
     char buf[48];
     std::snprintf(buf, sizeof buf, "%.17g s", t);  // every digit: a refusal may be 1e-9 away
     return buf;
 }
-}  // namespace
+
+bool same_instant(double t, double expected, double dt) {
+    return std::abs(t - expected) <= 1e-9 * std::max(std::abs(expected), dt);
+}
 
 void check_window(const AdvanceRequest& request, double now, const std::string& who) {
     if (!std::isfinite(request.t))
@@ -20,7 +22,7 @@ void check_window(const AdvanceRequest& request, double now, const std::string& 
     if (!(request.dt > 0.0) || !std::isfinite(request.dt))
         throw SolverError("bad_message", who + ": ADVANCE dt = " + seconds(request.dt) +
                                              " is not a finite window length > 0");
-    if (!(std::abs(request.t - now) <= 1e-9 * std::max(std::abs(now), request.dt)))
+    if (!same_instant(request.t, now, request.dt))
         throw SolverError("bad_state", who + ": ADVANCE starts at t = " + seconds(request.t) + " but the " + who +
                                            " is at t = " + seconds(now));
 }

@@ -50,6 +50,34 @@ def test_version_mismatch_is_refused_and_logged():
     assert "refused a connection: participant 'structure' speaks protocol 99..99" in text, text
 
 
+def test_reply_with_a_wrong_seq_is_named():
+    # Before 2026-11-25 the coordinator waited for the right seq for ever: the heartbeats kept it alive.
+    run_fault("wrong_seq", "which answers no open request (open: ADVANCE", 5)
+
+
+def test_reply_sent_before_its_request_is_named():
+    # ... and took an ADVANCED sent ahead of its ADVANCE as the answer to it (seq + 2: INIT, SNAPSHOT, ADVANCE).
+    run_fault("early", "error: structure sent ADVANCED with seq", 5)
+
+
+def test_reply_of_the_wrong_type_is_named():
+    run_fault("wrong_reply", "with ACK, not ADVANCED", 5)
+
+
+def test_reply_reaching_another_time_is_named():
+    run_fault("wrong_time", "reports reaching t = 2 s, but the window ends at t = 1 s", 5)
+
+
+def test_empty_state_is_named():
+    # INIT reads empty state bytes as "start fresh": a resume from them would restart at t = 0.
+    run_fault("empty_state", "sent a STATE with no bytes", 5, extra=("--set", "run.checkpoint_interval=1.0"))
+
+
+def test_wrong_kind_is_refused():
+    text = run_fault("wrong_kind", "structure exited with status 3", 5, env={"MISBEHAVE": "wrong_kind"})
+    assert "'structure' says it is a fluid program" in text, text
+
+
 def start_long(name, *extra):
     out = harness.out_dir(name)
     run = harness.Running("run", LONG, "--out", out, "--quiet", *extra)

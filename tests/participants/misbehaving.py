@@ -9,6 +9,13 @@ section picks the fault:
   mode = "silent"         stops answering and stops heartbeats after INIT (a hang)
   mode = "version"        says HELLO with protocol version 99 only
   mode = "error"          answers the first ADVANCE with ERROR diverged
+  mode = "wrong_seq"      answers the first ADVANCE with a seq that is not the request's
+  mode = "early"          sends an ADVANCED right after READY, before any ADVANCE was asked for
+  mode = "wrong_reply"    answers the first ADVANCE with ACK
+  mode = "wrong_time"     reports reaching t + dt + 1 s
+  mode = "empty_state"    answers CHECKPOINT with a STATE without bytes
+  mode = "wrong_kind"     says HELLO with kind "fluid" (from the env, like "version")
+Otherwise it answers like a structure that does not move.
 """
 import os
 import struct
@@ -44,7 +51,8 @@ def main():
     # The mode arrives only with INIT; a version fault must show at HELLO, so it may also come from the env.
     mode = os.environ.get("MISBEHAVE", "")
     version = 99 if mode == "version" else 1
-    send("HELLO", 1, {"name": args.get("--name", "structure"), "kind": "structure", "version_min": version,
+    kind_said = "fluid" if mode == "wrong_kind" else "structure"
+    send("HELLO", 1, {"name": args.get("--name", "structure"), "kind": kind_said, "version_min": version,
                       "version_max": version, "software": "misbehaving.py", "pid": os.getpid()}, v=version)
     reply = recv()
     if reply["type"] != "WELCOME":
@@ -65,6 +73,7 @@ def main():
 
     mesh = {"vertices": f8(4, [0, 0, 1, 0, 1, 0.1, 0, 0.1]),
             "cells": {"dtype": "i4", "shape": [1, 4], "data": struct.pack("<4i", 0, 1, 2, 3)}}
+    now = 0.0
     while True:
         msg = recv(30.0)
         kind, seq, body = msg["type"], msg["seq"], msg["body"]
@@ -73,6 +82,10 @@ def main():
         if kind == "INIT":
             mode = body["config"].get("mode", mode)
             send("READY", seq, {"dt_wanted": 0.01, "interface": mesh, "info": {}})
+            if mode == "early":
+                zero = f8(4, [0.0] * 8)
+                send("ADVANCED", seq + 2, {"t": 1.0, "dt_wanted": 0.01, "outputs": {"displacement": zero, "velocity": zero},
+                                           "substeps": 1, "solver_iterations": 0, "compute_s": 0.0, "stats": {}})
             if mode == "silent":
                 beating.clear()
                 time.sleep(3600)
@@ -84,12 +97,19 @@ def main():
                 os._exit(7)
             elif mode == "error":
                 send("ERROR", seq, {"code": "diverged", "message": "node 3: rotation = nan at t = 0.01 s", "in_reply_to": seq})
+            elif mode == "wrong_reply":
+                send("ACK", seq, {})
             else:
+                now = body["t"] + body["dt"]
                 zero = f8(4, [0.0] * 8)
-                send("ADVANCED", seq, {"t": body["t"] + body["dt"], "dt_wanted": 0.01, "outputs": {"displacement": zero, "velocity": zero},
-                                       "substeps": 1, "solver_iterations": 0, "compute_s": 0.0, "stats": {}})
+                send("ADVANCED", seq + 7 if mode == "wrong_seq" else seq,
+                     {"t": now + 1.0 if mode == "wrong_time" else now, "dt_wanted": 0.01,
+                      "outputs": {"displacement": zero, "velocity": zero},
+                      "substeps": 1, "solver_iterations": 0, "compute_s": 0.0, "stats": {}})
         elif kind == "SNAPSHOT":
-            send("FRAME", seq, {"t": 0.0, "fields": {}})
+            send("FRAME", seq, {"t": now, "fields": {}})
+        elif kind == "CHECKPOINT":
+            send("STATE", seq, {"t": now, "state": b"" if mode == "empty_state" else struct.pack("<d", now)})
         elif kind == "BYE":
             send("ACK", seq, {})
             return

@@ -61,7 +61,8 @@ public:
     void await_hellos(const std::vector<std::string>& roles);
 
     std::uint64_t send(const std::string& role, protocol::MessageType type, protocol::Body body = protocol::Empty{});
-    // Waits for the reply to `seq`; an ERROR reply becomes a ParticipantFailure with its code.
+    // Waits for the reply to `seq`, which the hub has already checked is of the request's reply type; an
+    // ERROR reply becomes a ParticipantFailure with its code.
     protocol::Message await_reply(const std::string& role, std::uint64_t seq);
     protocol::Message request(const std::string& role, protocol::MessageType type, protocol::Body body = protocol::Empty{}) {
         return await_reply(role, send(role, type, std::move(body)));
@@ -76,6 +77,7 @@ public:
 private:
     void pump(int wait_ms);
     void handle_stranger(const std::string& identity, const zmq::message_t& payload);
+    void file_reply(const std::string& role, protocol::Message m);
     void check_liveness();
     void send_raw(const std::string& identity, const protocol::Message& m);
     const std::string& identity_of(const std::string& role) const;
@@ -90,6 +92,7 @@ private:
     std::map<std::string, std::string> identity_role_;   // routing identity -> role
     std::map<std::string, std::string> role_identity_;
     std::map<std::string, std::map<std::uint64_t, protocol::Message>> inbox_;  // role -> seq -> reply
+    std::map<std::string, std::map<std::uint64_t, protocol::MessageType>> open_;  // role -> seq -> unanswered request
     std::vector<std::string> expected_;
     std::uint64_t seq_ = 0;
     std::chrono::steady_clock::time_point last_beat_sent_;

@@ -28,8 +28,13 @@ public:
     Hub& hub() { return hub_; }
 
 private:
+    struct Asked {  // the ADVANCE in flight, to check its reply against
+        double t = 0.0, dt = 0.0;
+        std::uint32_t substeps = 0;
+        std::chrono::steady_clock::time_point sent;
+    };
     Hub& hub_;
-    std::map<std::string, std::chrono::steady_clock::time_point> started_;
+    std::map<std::string, Asked> asked_;
 };
 
 // What travels between the two sides, as of the start of the current window.

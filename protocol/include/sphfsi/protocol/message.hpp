@@ -25,6 +25,21 @@ bool parse_message_type(std::string_view name, MessageType& out);
 // HEARTBEAT and ERROR are not requests: they are never answered, malformed or not, whatever their token
 // (docs/protocol.md, "Errors"); answering an ERROR could start a ping-pong of ERRORs.
 inline bool is_answered(MessageType t) { return t != MessageType::Heartbeat && t != MessageType::Error; }
+// The reply each request expects besides ERROR (docs/protocol.md §3-4); HEARTBEAT for anything that is not
+// a request.
+inline MessageType expected_reply(MessageType request) {
+    switch (request) {
+        case MessageType::Hello: return MessageType::Welcome;
+        case MessageType::Init: return MessageType::Ready;
+        case MessageType::Advance: return MessageType::Advanced;
+        case MessageType::Snapshot: return MessageType::Frame;
+        case MessageType::Checkpoint: return MessageType::State;
+        case MessageType::Save:
+        case MessageType::Restore:
+        case MessageType::Bye: return MessageType::Ack;
+        default: return MessageType::Heartbeat;
+    }
+}
 
 struct Hello {                       // participant -> coordinator, first message
     std::string name;                // role in the scene: "fluid" or "structure"

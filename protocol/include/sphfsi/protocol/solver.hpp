@@ -69,6 +69,11 @@ struct AdvanceReply {
 // to the window's own length when it starts at t = 0. `who` names the solver in the message. One function,
 // so that every participant reads the rule the same way.
 void check_window(const AdvanceRequest& request, double now, const std::string& who);
+// The time tolerance of that rule, also used by the coordinator to check the time an ADVANCED reports:
+// `t` and `expected` are the same instant to 1e-9 x max(|expected|, dt).
+bool same_instant(double t, double expected, double dt);
+// A time with every digit and its unit ("0.10000000000000001 s"), for messages about these checks.
+std::string seconds(double t);
 
 // Progress counter the heartbeat thread reports; a solver bumps it once per sub-step.
 struct Progress {
