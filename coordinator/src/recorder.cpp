@@ -1,5 +1,6 @@
 #include "sphfsi/coordinator/recorder.hpp"
 
+#include <cctype>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -8,6 +9,31 @@
 namespace sphfsi::coordinator {
 namespace {
 std::vector<hsize_t> row_shape_of(const std::vector<std::uint64_t>& shape) { return {shape.begin(), shape.end()}; }
+
+// A name that can be an HDF5 dataset or attribute name as it is, and reads the same in h5py, ParaView and a
+// shell: participants choose their field names, so the rule is checked, never assumed.
+bool plain_name(const std::string& name) {
+    if (name.empty() || name.size() > 128 || name[0] == '.') return false;
+    for (char c : name)
+        if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.' || c == '+')) return false;
+    return true;
+}
+
+std::string quoted(const std::string& name) {
+    std::string out = "'";
+    for (char c : name.substr(0, 64)) out += std::isprint(static_cast<unsigned char>(c)) ? c : '?';
+    return out + (name.size() > 64 ? "...'" : "'");
+}
+
+void check_info_keys(const std::string& prefix, const Value& v) {
+    if (!v.is_table()) return;
+    for (const auto& [k, x] : v.as_table()) {
+        if (!plain_name(k))
+            throw RecordRefused("sent READY info key " + quoted(prefix + k) +
+                                ", which is not a plain name (letters, digits, _ - . +; not starting with '.')");
+        check_info_keys(prefix + k + ".", x);
+    }
+}
 
 void write_value_attributes(hid_t object, const std::string& prefix, const Value& v) {
     if (!v.is_table()) return;
@@ -100,6 +126,8 @@ void Recorder::copy_history(const std::filesystem::path& old_file, double until)
             copy_rows(group + name, frames, name == "time" ? 256 : 1);
         std::vector<double> times = read_all(group + "time");
         frame_times_[role].assign(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(frames));
+        for (const auto& name : h5::children(src.get(), "/frames/" + role))
+            if (name != "time") frame_fields_[role].insert(name);
     }
     flush();
 }
@@ -122,6 +150,7 @@ h5::Series& Recorder::series(const std::string& path, const std::vector<hsize_t>
 }
 
 void Recorder::set_participant(const std::string& role, const std::string& software, const Value& info) {
+    check_info_keys("", info);
     std::string path = "/participants/" + role;
     if (!h5::exists(h5_.get(), path)) {
         h5::Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose, "lcpl");
@@ -166,19 +195,34 @@ void Recorder::append_window(const std::vector<std::pair<std::string, double>>& 
 }
 
 void Recorder::append_frame(const std::string& role, double t, const protocol::Fields& fields) {
-    std::string group = "/frames/" + role + "/";
+    const std::string group = "/frames/" + role + "/";
+    // Every check before the first write: each field's rows must stay aligned with /frames/ROLE/time.
+    std::set<std::string> names;
     for (const auto& [name, field] : fields) {
-        std::visit(
-            [&](const auto& a) {
-                using T = typename std::decay_t<decltype(a)>::value_type;
-                bool is_int = std::is_same_v<T, std::int32_t>;
-                h5::Series& s = series(group + name, row_shape_of(a.shape), is_int, 1);
-                if (s.row_shape() != row_shape_of(a.shape) || s.is_int() != is_int)
-                    throw std::runtime_error(role + " changed the shape or type of field '" + name + "' between frames");
-                s.append(a.values.data(), 1);
-            },
-            field);
+        if (!plain_name(name) || name == "time")
+            throw RecordRefused("sent a FRAME field named " + quoted(name) +
+                                ", which is not a plain name (letters, digits, _ - . +; not starting with '.'; not 'time')");
+        names.insert(name);
     }
+    auto first = frame_fields_.find(role);
+    if (first == frame_fields_.end()) {
+        frame_fields_[role] = names;
+    } else if (first->second != names) {
+        std::string was, now;
+        for (const auto& n : first->second) was += (was.empty() ? "" : ", ") + n;
+        for (const auto& n : names) now += (now.empty() ? "" : ", ") + n;
+        throw RecordRefused("changed its FRAME fields from [" + was + "] to [" + now + "]; every frame must send the same fields");
+    }
+    auto is_int_field = [](const protocol::Field& f) { return std::holds_alternative<protocol::I32Array>(f); };
+    auto shape_of = [](const protocol::Field& f) { return std::visit([](const auto& a) { return row_shape_of(a.shape); }, f); };
+    for (const auto& [name, field] : fields) {
+        auto known = series_.find(group + name);
+        if (known == series_.end() && h5::exists(h5_.get(), group + name)) known = series_.emplace(group + name, h5::Series(h5_.get(), group + name)).first;
+        if (known != series_.end() && (known->second.row_shape() != shape_of(field) || known->second.is_int() != is_int_field(field)))
+            throw RecordRefused("changed the shape or type of FRAME field '" + name + "' between frames");
+    }
+    for (const auto& [name, field] : fields)
+        std::visit([&](const auto& a) { series(group + name, row_shape_of(a.shape), is_int_field(field), 1).append(a.values.data(), 1); }, field);
     series(group + "time", {}, false, 256).append(&t, 1);
     frame_times_[role].push_back(t);
     flush();

@@ -231,7 +231,11 @@ void Runner::initialise(std::optional<Checkpoint>& resume) {
         } else {
             fluid_dt_ = ready.dt_wanted;
         }
-        recorder_->set_participant(role, hub_->peers().at(role).software, ready.info);
+        try {
+            recorder_->set_participant(role, hub_->peers().at(role).software, ready.info);
+        } catch (const RecordRefused& e) {
+            throw ParticipantFailure(role, "garbage", e.what());
+        }
     }
     if (structure_)
         watchpoints_ = std::make_unique<Watchpoints>(opt_.out_dir / "watchpoints.csv", scene_.tree, iface_.mesh,
@@ -408,7 +412,11 @@ void Runner::snapshot_all() {
         const Frame& frame = m.as<Frame>();
         if (!same_instant(frame.t, t_, output_dt_))
             throw ParticipantFailure(role, "garbage", "sent a FRAME of t = " + seconds(frame.t) + " at t = " + seconds(t_));
-        recorder_->append_frame(role, t_, frame.fields);
+        try {
+            recorder_->append_frame(role, t_, frame.fields);
+        } catch (const RecordRefused& e) {
+            throw ParticipantFailure(role, "garbage", e.what());
+        }
     }
     if (watchpoints_) watchpoints_->flush();
     ++output_index_;

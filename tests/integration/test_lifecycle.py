@@ -78,6 +78,17 @@ def test_wrong_kind_is_refused():
     assert "'structure' says it is a fluid program" in text, text
 
 
+def test_frames_that_cannot_be_recorded_are_named():
+    # Before 2026-11-25 a field named "time" interleaved its rows with the frame times, a field set that
+    # changed between frames left rows misaligned with /frames/ROLE/time, and a name HDF5 cannot hold failed
+    # in the recorder without naming the participant.
+    run_fault("frame_time", "error: structure sent a FRAME field named 'time'", 5)
+    run_fault("frame_bad_name", "error: structure sent a FRAME field named ''", 5)
+    run_fault("frame_changes", "error: structure changed its FRAME fields from [y] to [y, zz]", 5)
+    run_fault("info_bad_key", "error: structure sent READY info key ''", 5)
+    run_fault("stats_text", "error: structure reports stats 'x' that is not a number", 5)
+
+
 def start_long(name, *extra):
     out = harness.out_dir(name)
     run = harness.Running("run", LONG, "--out", out, "--quiet", *extra)

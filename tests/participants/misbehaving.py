@@ -15,6 +15,11 @@ section picks the fault:
   mode = "wrong_time"     reports reaching t + dt + 1 s
   mode = "empty_state"    answers CHECKPOINT with a STATE without bytes
   mode = "wrong_kind"     says HELLO with kind "fluid" (from the env, like "version")
+  mode = "frame_time"     sends a FRAME field named "time" (the recorder's own)
+  mode = "frame_bad_name" sends a FRAME field named ""
+  mode = "frame_changes"  sends field y in its first FRAME, y and zz in the next
+  mode = "info_bad_key"   sends READY info with a key ""
+  mode = "stats_text"     reports ADVANCED stats with a string value
 Otherwise it answers like a structure that does not move.
 """
 import os
@@ -81,7 +86,7 @@ def main():
             continue
         if kind == "INIT":
             mode = body["config"].get("mode", mode)
-            send("READY", seq, {"dt_wanted": 0.01, "interface": mesh, "info": {}})
+            send("READY", seq, {"dt_wanted": 0.01, "interface": mesh, "info": {"": 1} if mode == "info_bad_key" else {}})
             if mode == "early":
                 zero = f8(4, [0.0] * 8)
                 send("ADVANCED", seq + 2, {"t": 1.0, "dt_wanted": 0.01, "outputs": {"displacement": zero, "velocity": zero},
@@ -105,9 +110,13 @@ def main():
                 send("ADVANCED", seq + 7 if mode == "wrong_seq" else seq,
                      {"t": now + 1.0 if mode == "wrong_time" else now, "dt_wanted": 0.01,
                       "outputs": {"displacement": zero, "velocity": zero},
-                      "substeps": 1, "solver_iterations": 0, "compute_s": 0.0, "stats": {}})
+                      "substeps": 1, "solver_iterations": 0, "compute_s": 0.0,
+                      "stats": {"x": "text"} if mode == "stats_text" else {}})
         elif kind == "SNAPSHOT":
-            send("FRAME", seq, {"t": now, "fields": {}})
+            one = {"dtype": "f8", "shape": [1, 1], "data": struct.pack("<d", now)}
+            fields = {"frame_time": {"time": one}, "frame_bad_name": {"": one},
+                      "frame_changes": {"y": one, **({"zz": one} if now > 0 else {})}}.get(mode, {})
+            send("FRAME", seq, {"t": now, "fields": fields})
         elif kind == "CHECKPOINT":
             send("STATE", seq, {"t": now, "state": b"" if mode == "empty_state" else struct.pack("<d", now)})
         elif kind == "BYE":

@@ -6,6 +6,8 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -20,18 +22,30 @@ struct RunMetadata {
     std::uint32_t protocol_version = 0;
 };
 
+// What a participant sent cannot be recorded as it is (a field name HDF5 cannot hold, a field set or shape
+// that changed between frames, ...). Thrown before anything is written, so the record stays consistent; the
+// run turns it into a failure naming the participant.
+class RecordRefused : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
 class Recorder {
 public:
     // Creates `file` (replacing it), or with `resume_at` reopens it and drops everything after that time.
     Recorder(std::filesystem::path file, const RunMetadata& meta, std::optional<double> resume_at = std::nullopt);
     ~Recorder();
 
+    // Throws RecordRefused, writing nothing, on an `info` key that is not a plain name (see append_frame).
     void set_participant(const std::string& role, const std::string& software, const Value& info);
     void set_interface(const protocol::InterfaceMesh& mesh);
 
     // One coupling window: named scalar columns (the same names every call) and the interface state.
     void append_window(const std::vector<std::pair<std::string, double>>& columns,
                        const protocol::F64Array* displacement, const protocol::F64Array* force);
+    // Throws RecordRefused, writing nothing, unless every name is a plain name (letters, digits, '_', '-',
+    // '.', '+'; not starting with '.'; not "time", which the recorder writes) and the fields are those of the
+    // role's first frame with the same shapes and types.
     void append_frame(const std::string& role, double t, const protocol::Fields& fields);
     void set_status(const std::string& status);  // "running", "completed", "failed: ...", "interrupted"
     void set_number(const std::string& name, double value);  // a root attribute (totals, CPU use)
@@ -55,6 +69,7 @@ private:
     hsize_t interface_rows_buffered_ = 0;
     std::uint64_t interface_vertices_ = 0;
     std::map<std::string, std::vector<double>> frame_times_;
+    std::map<std::string, std::set<std::string>> frame_fields_;  // role -> the field names of its first frame
 };
 
 }  // namespace sphfsi::coordinator
