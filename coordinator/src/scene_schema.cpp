@@ -1,6 +1,7 @@
 // The keys of a whole scene: the coordinator's own sections here, [fluid] and [structure] from the
 // solver libraries' schemas (so a scene is checked completely before any process starts).
 #include <algorithm>
+#include <sstream>
 
 #include "sphfsi/coordinator/scene.hpp"
 #include "sphfsi/fluid/schema.hpp"
@@ -8,6 +9,12 @@
 
 namespace sphfsi::coordinator {
 namespace {
+
+std::string shortest(double x) {
+    std::ostringstream s;
+    s << x;
+    return s.str();
+}
 
 void run_section(schema::TableSchema& s) {
     auto& run = s.table("run", "How long to run, how often to record, and how patient to be with participants.", true);
@@ -27,6 +34,15 @@ void run_section(schema::TableSchema& s) {
         if (t.at("heartbeat_s").as_double() * 2 > t.at("timeout_s").as_double())
             e.add(&t.at("heartbeat_s"), "key '" + path + ".heartbeat_s': must be at most half of " + path +
                                             ".timeout_s, or a healthy participant would look dead");
+        // Every frame and checkpoint is a window boundary and a write: a run asking for more than this many
+        // is a typo (1e-300 for 1e-3), and would crawl while it filled the disk.
+        constexpr double kMaxFrames = 1e6;
+        const double end = t.at("end_time").as_double();
+        for (const char* key : {"output_interval", "checkpoint_interval"})
+            if (const Value* v = t.find(key); v && end / v->as_double() > kMaxFrames)
+                e.add(v, "key '" + path + "." + key + "': must be at least " + path + ".end_time / 1e6 = " +
+                             shortest(end / kMaxFrames) + " s (at most a million " +
+                             (std::string(key) == "output_interval" ? "frames" : "checkpoints") + " per run)");
     });
 }
 

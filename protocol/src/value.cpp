@@ -101,6 +101,7 @@ PathStep parse_step(std::string_view part, std::string_view whole) {
     std::string digits(part.substr(open + 1, part.size() - open - 2));
     if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos)
         throw ConfigError("index must be a non-negative integer in '" + std::string(whole) + "'");
+    if (digits.size() > 9) throw ConfigError("index " + digits + " is out of range in '" + std::string(whole) + "'");
     step.index = std::stol(digits);
     return step;
 }
@@ -113,6 +114,11 @@ void set_path(Value& root, std::string_view dotted, Value v) {
         if (node->is_null()) node->make_table();
         auto dot = dotted.find('.');
         PathStep step = parse_step(dotted.substr(0, dot), whole);
+        if (!node->is_table()) {  // e.g. members.0.n_elements, where members is an array of tables
+            const std::string walked(whole.substr(0, whole.size() - dotted.size() - 1));
+            throw ConfigError("'" + std::string(whole) + "': '" + walked + "' is " +
+                              (node->is_array() ? "an array; address an entry as " + walked + "[INDEX]" : "not a table"));
+        }
         auto& table = node->as_table_mut();
         Value* child = &table[step.key];
         if (step.index >= 0) {  // an entry of an array of tables, e.g. [[structure.members]]

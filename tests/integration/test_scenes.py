@@ -37,6 +37,9 @@ def test_bad_override_is_named():
     assert code == 2 and "unknown key 'run.end_tme'" in text, text
     code, text = harness.sphfsi("check", scene, "--set", "run.output_interval=0")
     assert code == 2 and "key 'run.output_interval': got 0" in text, text
+    # A typo such as 1e-300 for 1e-3 would crawl while filling the disk: at most a million frames.
+    code, text = harness.sphfsi("check", scene, "--set", "run.output_interval=1e-300")
+    assert code == 2 and "key 'run.output_interval': must be at least run.end_time / 1e6" in text, text
 
 
 def test_nothing_runs_on_an_invalid_scene():

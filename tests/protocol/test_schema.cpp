@@ -97,4 +97,11 @@ TEST_CASE("dotted paths reach into tables and arrays of tables") {
     CHECK(find_path(root, "structure.members[5].n") == nullptr);
     CHECK_THROWS_AS(set_path(root, "structure.members[5].n", Value(1)), ConfigError);
     CHECK_THROWS_AS(set_path(root, "structure.members[x].n", Value(1)), ConfigError);
+    // An index too large for any array, and an array addressed as a table, are named (both used to escape
+    // as std::out_of_range from std::stol, or as a type error that named no key).
+    CHECK_THROWS_WITH_AS(set_path(root, "structure.members[99999999999999999999999].n", Value(1)),
+                         doctest::Contains("index 99999999999999999999999 is out of range"), ConfigError);
+    CHECK_THROWS_WITH_AS(set_path(root, "structure.members.0.n", Value(1)),
+                         doctest::Contains("'structure.members' is an array; address an entry as structure.members[INDEX]"),
+                         ConfigError);
 }
