@@ -54,7 +54,7 @@ std::uint64_t Hub::send(const std::string& role, MessageType type, Body body) {
     Message m = make_message(type, ++seq_, token_, std::move(body));
     m.version = peers_.at(role).version;
     send_raw(identity_of(role), m);
-    open_[role][m.seq] = type;
+    open_[role][m.seq] = OpenRequest{type, Clock::now()};
     return m.seq;
 }
 
@@ -163,7 +163,9 @@ void Hub::pump(int wait_ms) {
             throw refusal("version_mismatch", "switched protocol version to " + std::to_string(m.version));
         peer.last_seen = Clock::now();
         if (m.type == MessageType::Heartbeat) {
-            peer.progress = m.as<Heartbeat>().progress;
+            const std::uint64_t progress = m.as<Heartbeat>().progress;
+            if (progress != peer.progress) peer.progress_moved = peer.last_seen;
+            peer.progress = progress;
             continue;
         }
         file_reply(role, std::move(m));
@@ -184,14 +186,14 @@ void Hub::file_reply(const std::string& role, Message m) {
             throw ParticipantFailure(role, e.code, "reported " + e.code + ": " + e.message);
         }
         std::string open_list;
-        for (const auto& [seq, type] : open) open_list += (open_list.empty() ? "" : ", ") + std::string(to_string(type)) + " " + std::to_string(seq);
+        for (const auto& [seq, r] : open) open_list += (open_list.empty() ? "" : ", ") + std::string(to_string(r.type)) + " " + std::to_string(seq);
         throw ParticipantFailure(role, "garbage", "sent " + std::string(to_string(m.type)) + " with seq " + std::to_string(m.seq) +
                                                       ", which answers no open request (open: " +
                                                       (open_list.empty() ? "none" : open_list) + ")");
     }
-    const MessageType expected = expected_reply(request->second);
+    const MessageType expected = expected_reply(request->second.type);
     if (m.type != expected && m.type != MessageType::Error)
-        throw ParticipantFailure(role, "garbage", "answered " + std::string(to_string(request->second)) + " (seq " +
+        throw ParticipantFailure(role, "garbage", "answered " + std::string(to_string(request->second.type)) + " (seq " +
                                                       std::to_string(m.seq) + ") with " + std::string(to_string(m.type)) +
                                                       ", not " + std::string(to_string(expected)));
     open.erase(request);
@@ -251,6 +253,16 @@ void Hub::check_liveness() {
         if (silent > timing_.timeout_s)
             throw ParticipantFailure(role, "hung", "has been silent for " + fmt_s(silent) +
                                                        " (no reply, no heartbeat; run.timeout_s = " + fmt_s(timing_.timeout_s) + ")");
+        // Heartbeats prove the process lives, not that it computes: during an ADVANCE its sub-step count
+        // must move. (Only ADVANCE: INIT, SNAPSHOT and CHECKPOINT take no sub-steps.)
+        for (const auto& [seq, request] : open_[role]) {
+            if (request.type != MessageType::Advance) continue;
+            double stalled = seconds_since(std::max(request.sent, peer.progress_moved));
+            if (stalled > timing_.stall_timeout_s)
+                throw ParticipantFailure(role, "hung", "has taken no sub-step for " + fmt_s(stalled) + " of an ADVANCE while its heartbeats go on " +
+                                                           "(progress stuck at " + std::to_string(peer.progress) +
+                                                           "; run.stall_timeout_s = " + fmt_s(timing_.stall_timeout_s) + ")");
+        }
     }
     if (seconds_since(last_beat_sent_) >= timing_.heartbeat_s) {
         last_beat_sent_ = Clock::now();

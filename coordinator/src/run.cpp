@@ -196,7 +196,8 @@ int Runner::execute() {
 
 void Runner::initialise(std::optional<Checkpoint>& resume) {
     const Value& run = scene_.section("run");
-    HubTiming timing{run.at("heartbeat_s").as_double(), run.at("timeout_s").as_double(), run.at("startup_timeout_s").as_double()};
+    HubTiming timing{run.at("heartbeat_s").as_double(), run.at("timeout_s").as_double(), run.at("startup_timeout_s").as_double(),
+                     run.at("stall_timeout_s").as_double()};
     if (opt_.listen.empty()) launcher_ = std::make_unique<Launcher>();
     hub_ = std::make_unique<Hub>(opt_.listen.empty() ? "tcp://127.0.0.1:*" : opt_.listen, random_token(), timing,
                                  launcher_.get(), [this](const std::string& s) { log(s); });

@@ -78,6 +78,13 @@ def test_wrong_kind_is_refused():
     assert "'structure' says it is a fluid program" in text, text
 
 
+def test_stalled_participant_with_live_heartbeats_is_named():
+    # Before 2026-11-25 a participant stuck beside a live heartbeat thread was waited on for ever.
+    text = run_fault("stall", "error: structure has taken no sub-step for", 2.0 + 3.0,
+                     extra=("--set", "run.stall_timeout_s=2.0"))
+    assert "progress stuck at 0; run.stall_timeout_s = 2.0 s" in text, text
+
+
 def test_frames_that_cannot_be_recorded_are_named():
     # Before 2026-11-25 a field named "time" interleaved its rows with the frame times, a field set that
     # changed between frames left rows misaligned with /frames/ROLE/time, and a name HDF5 cannot hold failed

@@ -20,6 +20,7 @@ section picks the fault:
   mode = "frame_changes"  sends field y in its first FRAME, y and zz in the next
   mode = "info_bad_key"   sends READY info with a key ""
   mode = "stats_text"     reports ADVANCED stats with a string value
+  mode = "stall"          never answers the first ADVANCE while its heartbeats go on, progress standing still
 Otherwise it answers like a structure that does not move.
 """
 import os
@@ -64,11 +65,13 @@ def main():
         print("misbehaving: refused:", reply["body"].get("message"), file=sys.stderr)
         sys.exit(3)
 
+    stalled = threading.Event()
+
     def heartbeat():
         n = 0
         while beating.is_set():
             n += 1
-            send("HEARTBEAT", 1000 + n, {"progress": n})
+            send("HEARTBEAT", 1000 + n, {"progress": 0 if stalled.is_set() else n})
             time.sleep(0.2)
 
     beating.set()
@@ -102,6 +105,9 @@ def main():
                 os._exit(7)
             elif mode == "error":
                 send("ERROR", seq, {"code": "diverged", "message": "node 3: rotation = nan at t = 0.01 s", "in_reply_to": seq})
+            elif mode == "stall":
+                stalled.set()  # the main thread is stuck; the heartbeat thread goes on
+                time.sleep(3600)
             elif mode == "wrong_reply":
                 send("ACK", seq, {})
             else:

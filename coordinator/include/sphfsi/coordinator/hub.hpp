@@ -39,6 +39,9 @@ struct HubTiming {
     double heartbeat_s = 0.5;
     double timeout_s = 3.0;
     double startup_timeout_s = 10.0;
+    // A participant whose heartbeats go on but whose sub-step count stands still this long during an
+    // ADVANCE is stuck (a deadlock or endless loop beside a live heartbeat thread): run.stall_timeout_s.
+    double stall_timeout_s = 30.0;
 };
 
 struct PeerInfo {
@@ -47,6 +50,7 @@ struct PeerInfo {
     std::uint32_t version = 0;  // protocol version negotiated with this participant
     std::uint64_t progress = 0;
     std::chrono::steady_clock::time_point last_seen;
+    std::chrono::steady_clock::time_point progress_moved;  // when `progress` last changed
 };
 
 class Hub {
@@ -92,7 +96,11 @@ private:
     std::map<std::string, std::string> identity_role_;   // routing identity -> role
     std::map<std::string, std::string> role_identity_;
     std::map<std::string, std::map<std::uint64_t, protocol::Message>> inbox_;  // role -> seq -> reply
-    std::map<std::string, std::map<std::uint64_t, protocol::MessageType>> open_;  // role -> seq -> unanswered request
+    struct OpenRequest {
+        protocol::MessageType type;
+        std::chrono::steady_clock::time_point sent;
+    };
+    std::map<std::string, std::map<std::uint64_t, OpenRequest>> open_;  // role -> seq -> unanswered request
     std::vector<std::string> expected_;
     std::uint64_t seq_ = 0;
     std::chrono::steady_clock::time_point last_beat_sent_;
