@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <stdexcept>
@@ -24,7 +25,7 @@ std::string describe_exit(int status) {
     return "stopped (status " + std::to_string(status) + ")";
 }
 
-Launcher::~Launcher() { stop_all(0.0); }
+Launcher::~Launcher() { (void)stop_all(0.0); }
 
 void Launcher::start(const std::string& role, const std::vector<std::string>& argv, const std::string& token) {
     if (argv.empty()) throw std::invalid_argument("no program for " + role);
@@ -69,29 +70,41 @@ std::optional<std::pair<std::string, std::string>> Launcher::poll_exited() {
 
 bool Launcher::running(const std::string& role) const { return children_.count(role) > 0; }
 
-void Launcher::stop_all(double grace_s) {
+std::vector<std::string> Launcher::stop_all(double grace_s) {
     using namespace std::chrono;
-    auto wait_all = [this](double seconds) {
+    std::vector<std::string> notes;
+    std::string stopped_by;  // empty while children may still exit by themselves
+    auto wait_all = [&](double seconds) {
         auto until = steady_clock::now() + duration<double>(seconds);
         do {
             for (auto it = children_.begin(); it != children_.end();) {
                 int status = 0;
-                if (::waitpid(it->second, &status, WNOHANG) == it->second) it = children_.erase(it);
-                else ++it;
+                if (::waitpid(it->second, &status, WNOHANG) != it->second) {
+                    ++it;
+                    continue;
+                }
+                if (!stopped_by.empty()) notes.push_back(it->first + " " + describe_exit(status) + " after " + stopped_by);
+                else if (!(WIFEXITED(status) && WEXITSTATUS(status) == 0)) notes.push_back(it->first + " " + describe_exit(status));
+                it = children_.erase(it);
             }
             if (children_.empty()) return;
             std::this_thread::sleep_for(milliseconds(10));
         } while (steady_clock::now() < until);
     };
     wait_all(grace_s);
+    char grace[32];
+    std::snprintf(grace, sizeof grace, "%.1f s", grace_s);
+    stopped_by = std::string("SIGTERM (it had not exited ") + grace + " after the run ended)";
     for (auto& [role, pid] : children_) ::kill(pid, SIGTERM);
     wait_all(1.0);
     for (auto& [role, pid] : children_) {
         ::kill(pid, SIGCONT);  // a stopped (SIGSTOP) child cannot act on SIGTERM; SIGKILL works regardless
         ::kill(pid, SIGKILL);
+        ::waitpid(pid, nullptr, 0);
+        notes.push_back(role + " was killed with SIGKILL: it ignored SIGTERM for 1 s");
     }
-    for (auto& [role, pid] : children_) ::waitpid(pid, nullptr, 0);
     children_.clear();
+    return notes;
 }
 
 }  // namespace sphfsi::coordinator

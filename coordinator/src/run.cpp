@@ -175,7 +175,8 @@ int Runner::execute() {
     const double loop_wall = loop_start_ ? std::chrono::duration<double>(Clock::now() - *loop_start_).count() : 0.0;
     progress_finish();
     if (hub_) hub_->goodbye(code == 0 ? 5.0 : 1.0);
-    if (launcher_) launcher_->stop_all(code == 0 ? 2.0 : 0.5);
+    if (launcher_)
+        for (const auto& note : launcher_->stop_all(code == 0 ? 2.0 : 0.5)) log("shutdown: " + note);
     double cpu = cpu_seconds();
     recorder_->set_number("coordinator_cpu_s", cpu);
     recorder_->set_number("wall_s", wall_in_loop_s_);
@@ -248,9 +249,11 @@ void Runner::initialise(std::optional<Checkpoint>& resume) {
         energy_limits_.max_created = c.at("max_created_energy").as_double();
         energy_limits_.max_gain = c.at("max_energy_gain").as_double();
         energy_limits_.external_work = fluid_does_external_work();
-        // A warning, not an error: heavier structures are fine with any integrator (docs/validation.md).
+        // A warning, not an error: heavier structures are fine with any integrator (docs/validation.md). About
+        // the built-in structure only: a foreign one's [structure] keys are its own.
         const Value* integrator = find_path(scene_.tree, "structure.time.integrator");
-        if (schedule_->one_structure_step() && (!integrator || integrator->as_string() != "backward_euler"))
+        if (schedule_->one_structure_step() && !scene_.custom_program("structure") &&
+            (!integrator || !integrator->is_string() || integrator->as_string() != "backward_euler"))
             log("warning: coupling.structure_steps = \"window\" is meant with structure.time.integrator = "
                 "\"backward_euler\", whose step acceleration is the window's mean; one generalized-alpha step per "
                 "window failed from mass ratio 0.001 on the added-mass plate (docs/coupling.md)");

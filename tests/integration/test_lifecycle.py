@@ -85,6 +85,14 @@ def test_stalled_participant_with_live_heartbeats_is_named():
     assert "progress stuck at 0; run.stall_timeout_s = 2.0 s" in text, text
 
 
+def test_unclean_exit_after_bye_is_logged():
+    # The run is complete when BYE is acknowledged; a participant that then fails to exit 0 is worth a line.
+    out = harness.out_dir("bad_exit")
+    code, text = harness.sphfsi("run", BAD, "--out", out, "--quiet", "--set", "structure.mode=\"bad_exit\"", timeout=30)
+    assert code == 0, text
+    assert "shutdown: structure exited with status 5" in text, text
+
+
 def test_frames_that_cannot_be_recorded_are_named():
     # Before 2026-11-25 a field named "time" interleaved its rows with the frame times, a field set that
     # changed between frames left rows misaligned with /frames/ROLE/time, and a name HDF5 cannot hold failed

@@ -20,6 +20,7 @@ section picks the fault:
   mode = "frame_changes"  sends field y in its first FRAME, y and zz in the next
   mode = "info_bad_key"   sends READY info with a key ""
   mode = "stats_text"     reports ADVANCED stats with a string value
+  mode = "bad_exit"       answers BYE with ACK, then exits with status 5
   mode = "stall"          never answers the first ADVANCE while its heartbeats go on, progress standing still
 Otherwise it answers like a structure that does not move.
 """
@@ -127,6 +128,9 @@ def main():
             send("STATE", seq, {"t": now, "state": b"" if mode == "empty_state" else struct.pack("<d", now)})
         elif kind == "BYE":
             send("ACK", seq, {})
+            if mode == "bad_exit":
+                sock.close()
+                os._exit(5)
             return
 
 

@@ -22,8 +22,10 @@ public:
     // Non-blocking: a role whose process has exited since the last call, with a description of how.
     std::optional<std::pair<std::string, std::string>> poll_exited();
 
-    // Waits up to `grace_s` for each child to exit by itself, then SIGTERM, then SIGKILL. Reaps all.
-    void stop_all(double grace_s);
+    // Waits up to `grace_s` for each child to exit by itself, then SIGTERM, then SIGKILL. Reaps all. Returns
+    // a line for each child that did not end cleanly (a non-zero status, a signal, or our SIGTERM/SIGKILL):
+    // after BYE and ACK a participant exits 0, so anything else is worth a line in the log.
+    std::vector<std::string> stop_all(double grace_s);
 
     bool running(const std::string& role) const;
 
