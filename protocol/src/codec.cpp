@@ -1,6 +1,7 @@
 #include "sphfsi/protocol/codec.hpp"
 
 #include <bit>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <msgpack.hpp>
@@ -309,6 +310,20 @@ std::optional<InterfaceMesh> read_mesh(const msgpack::object& o, const std::stri
     for (auto idx : mesh.cells.values)
         if (idx < 0 || static_cast<std::uint64_t>(idx) >= mesh.vertices.rows())
             bad(what + ".cells refers to vertex " + std::to_string(idx) + " of " + std::to_string(mesh.vertices.rows()));
+    for (double x : mesh.vertices.values)
+        if (!std::isfinite(x)) bad(what + ".vertices holds a value that is not finite");
+    // Every user of the mesh assumes convex counter-clockwise cells (the fluid's inside-the-solid test, the
+    // bilinear inverse map): a clockwise or twisted cell would silently contain no point at all.
+    for (std::uint64_t c = 0; c < mesh.cells.rows(); ++c)
+        for (int k = 0; k < 4; ++k) {
+            auto corner = [&](int i) { return static_cast<std::uint64_t>(mesh.cells(c, static_cast<std::uint64_t>((k + i) % 4))); };
+            const double ax = mesh.vertices(corner(0), 0), ay = mesh.vertices(corner(0), 1);
+            const double bx = mesh.vertices(corner(1), 0), by = mesh.vertices(corner(1), 1);
+            const double cx = mesh.vertices(corner(2), 0), cy = mesh.vertices(corner(2), 1);
+            if (!((bx - ax) * (cy - by) - (by - ay) * (cx - bx) > 0.0))
+                bad(what + ".cells: cell " + std::to_string(c) + " is not a convex quadrilateral with counter-clockwise corners "
+                    "(it turns right or not at all at its corner " + std::to_string((k + 1) % 4) + ")");
+        }
     return mesh;
 }
 

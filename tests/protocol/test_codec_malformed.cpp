@@ -2,6 +2,7 @@
 #include <doctest/doctest.h>
 
 #include <msgpack.hpp>
+#include <cmath>
 #include <random>
 
 #include "sphfsi/protocol/codec.hpp"
@@ -185,4 +186,29 @@ TEST_CASE("random bytes and random corruptions never crash the decoder") {
         refused += code != "accepted";
     }
     CHECK(refused > 10000);  // nearly everything random is refused; what is accepted re-encodes (fuzz target)
+}
+
+TEST_CASE("interface meshes with cells that are not convex and counter-clockwise are refused") {
+    // Two unit squares side by side: vertices 0-1-2 along y = 0, 3-4-5 along y = 1.
+    auto ready = [](std::vector<std::int32_t> cells, double x0 = 0.0) {
+        InitReply r;
+        r.dt_wanted = 1e-3;
+        r.info = Value(Value::Table{});
+        const std::uint64_t rows = cells.size() / 4;
+        r.interface = InterfaceMesh{F64Array({6, 2}, {x0, 0, 1, 0, 2, 0, 0, 1, 1, 1, 2, 1}), I32Array({rows, 4}, std::move(cells))};
+        const std::string bytes = encode(make_message(MessageType::Ready, 3, "tok", std::move(r)));
+        try {
+            decode(bytes.data(), bytes.size());
+        } catch (const ProtocolError& e) {
+            return std::string(e.code()) + ": " + e.what();
+        }
+        return std::string("accepted");
+    };
+    CHECK(ready({0, 1, 4, 3, 1, 2, 5, 4}) == "accepted");
+    CHECK(ready({4, 3, 0, 1, 1, 2, 5, 4}) == "accepted");  // any corner may come first
+    // Clockwise: the fluid's inside test would find no point in it, silently.
+    CHECK(ready({0, 1, 4, 3, 1, 4, 5, 2}).find("bad_message: READY body.interface.cells: cell 1 is not a convex") == 0);
+    CHECK(ready({0, 1, 3, 4}).find("bad_message") == 0);        // twisted (a bow tie)
+    CHECK(ready({0, 1, 2, 4}).find("bad_message") == 0);        // three corners in a line: no area there
+    CHECK(ready({0, 1, 4, 3}, std::nan("")).find("bad_message: READY body.interface.vertices holds a value that is not finite") == 0);
 }
