@@ -1,8 +1,13 @@
 """The reference participant runtime (protocol/src/participant.cpp) keeps the rules of docs/protocol.md,
-§3 "Rules": this test plays the coordinator by hand against a real sphfsi-structure over 127.0.0.1 and
-checks the answers a replacement solver's author would rely on. Every wait is bounded."""
+§3 "Rules": this test plays the coordinator by hand against a real sphfsi-structure over
+127.0.0.1 and checks the answers a replacement solver's author would rely on. The checks that hold for any
+structure participant run against tests/participants/rigid_plate.py too, which must behave the same.
+Every wait is bounded."""
 import os
+import struct
 import subprocess
+import tempfile
+import time
 import tomllib
 
 import msgpack
@@ -12,6 +17,31 @@ import harness
 
 TOKEN = "5" * 32
 SCENE = os.path.join(harness.ROOT, "scenarios", "beam_only.toml")
+
+
+def section(path, name):
+    with open(path, "rb") as f:
+        return tomllib.load(f)[name]
+
+
+class Program:
+    """A structure participant to start by hand and its [structure] config."""
+
+    def __init__(self, name, argv, config):
+        self.name, self.argv, self.config = name, argv, config
+
+
+def programs():
+    return [
+        Program("sphfsi-structure", [os.path.join(harness.BIN, "sphfsi-structure")], section(SCENE, "structure")),
+        Program("rigid_plate.py", ["/usr/bin/python3", os.path.join(harness.PARTICIPANTS, "rigid_plate.py")],
+                section(os.path.join(harness.SCENES, "rigid_plate_step.toml"), "structure")),
+    ]
+
+
+def f8(rows, cols=2, values=None):
+    values = values if values is not None else [0.0] * (rows * cols)
+    return {"dtype": "f8", "shape": [rows, cols], "data": struct.pack("<%dd" % len(values), *values)}
 
 
 class Coordinator:
@@ -24,55 +54,137 @@ class Coordinator:
         self.sock.bind("tcp://127.0.0.1:*")
         self.endpoint = self.sock.getsockopt_string(zmq.LAST_ENDPOINT)
         self.peer = None
+        self.progress = 0  # from the participant's last HEARTBEAT
 
-    def receive(self, timeout_s=10.0):
-        """The next message that is not a HEARTBEAT, or None after timeout_s."""
-        while self.sock.poll(int(timeout_s * 1000)):
+    def receive(self, timeout_s=10.0, beat_every=None):
+        """The next message that is not a HEARTBEAT, or None after timeout_s. With beat_every, sends a
+        HEARTBEAT that often while it waits, as the real coordinator does."""
+        end = time.monotonic() + timeout_s
+        next_beat = time.monotonic()
+        while True:
+            now = time.monotonic()
+            if now >= end:
+                return None
+            if beat_every is not None and now >= next_beat:
+                self.heartbeat()
+                next_beat = now + beat_every
+            until = min(end, next_beat) if beat_every is not None else end
+            if not self.sock.poll(max(1, int((until - now) * 1000))):
+                continue
             peer, payload = self.sock.recv_multipart()
             self.peer = peer
-            m = msgpack.unpackb(payload, raw=False)
-            if m["type"] != "HEARTBEAT":
-                return m
-        return None
+            m = msgpack.unpackb(payload, raw=False)  # raises on a str that is not UTF-8
+            if m["type"] == "HEARTBEAT":
+                self.progress = m["body"]["progress"]
+                continue
+            return m
 
     def send_raw(self, envelope):
-        self.sock.send_multipart([self.peer, msgpack.packb(envelope, use_bin_type=True)])
+        self.send_bytes(msgpack.packb(envelope, use_bin_type=True))
 
-    def request(self, type_, seq, body):
+    def send_bytes(self, payload):
+        self.sock.send_multipart([self.peer, payload])
+
+    def send(self, type_, seq, body):
         self.send_raw({"v": 1, "type": type_, "seq": seq, "token": TOKEN, "body": body})
-        return self.receive()
+
+    def request(self, type_, seq, body, timeout_s=10.0):
+        self.send(type_, seq, body)
+        return self.receive(timeout_s)
+
+    def heartbeat(self):
+        if self.peer is not None:
+            self.send("HEARTBEAT", 0, {"progress": 0})
 
     def close(self):
-        self.sock.close()
-        self.ctx.term()
+        if not self.sock.closed:
+            self.sock.close()
+            self.ctx.term()
 
 
-def expect_error(reply, seq, code):
+class Session:
+    """One participant process started by hand against a Coordinator, welcomed."""
+
+    def __init__(self, argv, heartbeat_s=0.5, timeout_s=10.0):
+        self.c = Coordinator()
+        self.log = tempfile.TemporaryFile(mode="w+")
+        self.proc = subprocess.Popen([*argv, "--connect", self.c.endpoint, "--name", "structure"],
+                                     env=dict(os.environ, SPHFSI_TOKEN=TOKEN), stdout=self.log,
+                                     stderr=subprocess.STDOUT, text=True)
+        hello = self.c.receive()
+        assert hello is not None and hello["type"] == "HELLO", hello
+        self.c.send_raw({"v": 1, "type": "WELCOME", "seq": hello["seq"], "token": TOKEN,
+                         "body": {"version": 1, "heartbeat_s": heartbeat_s, "timeout_s": timeout_s}})
+
+    def init(self, config, seq=2, t0=0.0, interface=None):
+        ready = self.c.request("INIT", seq, {"config": config, "t0": t0, "interface": interface, "state": b""},
+                               timeout_s=30)
+        assert ready is not None and ready["type"] == "READY" and ready["seq"] == seq, brief(ready)
+        return ready
+
+    def output(self):
+        self.log.seek(0)
+        return self.log.read()
+
+    def wait(self, timeout_s):
+        """The exit status, or None if the process still runs after timeout_s."""
+        try:
+            return self.proc.wait(timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            return None
+
+    def close(self):
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait(timeout=10)
+        self.c.close()
+        self.log.close()
+
+
+def vertices(ready):
+    mesh = ready["body"]["interface"]
+    return mesh["vertices"]["shape"][0] if mesh is not None else 0
+
+
+def advance(t, dt, n, substeps=1, **inputs):
+    return {"t": t, "dt": dt, "substeps": substeps, "iteration": 0, "inputs": inputs or {"force": f8(n)}}
+
+
+def brief(m):
+    """A message for an assertion's text: bulk data left out."""
+    if isinstance(m, dict):
+        return {k: brief(v) for k, v in m.items() if k not in ("interface", "outputs", "fields")}
+    if isinstance(m, list):
+        return [brief(x) for x in m]
+    return m if not isinstance(m, bytes) else f"<{len(m)} bytes>"
+
+
+def expect_error(reply, seq, code, mentions=None):
     assert reply is not None, f"no answer to seq {seq}"
-    assert reply["type"] == "ERROR", reply
-    assert reply["body"]["code"] == code, reply
-    assert reply["seq"] == seq and reply["body"]["in_reply_to"] == seq, reply
+    assert reply["type"] == "ERROR", brief(reply)
+    assert reply["body"]["code"] == code, brief(reply)
+    assert reply["seq"] == seq and reply["body"]["in_reply_to"] == seq, brief(reply)
+    if mentions is not None:
+        assert mentions in reply["body"]["message"], brief(reply)
+
+
+def with_bad_utf8(envelope, placeholder):
+    """The envelope packed, with the str `placeholder` (4 ASCII characters) turned into 4 bytes that are not
+    UTF-8: msgpack-python itself only writes valid UTF-8."""
+    packed = msgpack.packb(envelope, use_bin_type=True)
+    old = b"\xa4" + placeholder.encode()
+    assert len(placeholder) == 4 and packed.count(old) == 1
+    return packed.replace(old, b"\xa4\xff\xfe\x1bX")
 
 
 def test_runtime_answers_as_the_protocol_document_says():
-    with open(SCENE, "rb") as f:
-        config = tomllib.load(f)["structure"]
-    c = Coordinator()
-    env = dict(os.environ, SPHFSI_TOKEN=TOKEN)
-    proc = subprocess.Popen([os.path.join(harness.BIN, "sphfsi-structure"), "--connect", c.endpoint,
-                             "--name", "structure"], env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            text=True)
+    s = Session([os.path.join(harness.BIN, "sphfsi-structure")])
+    c = s.c
     try:
-        hello = c.receive()
-        assert hello is not None and hello["type"] == "HELLO", hello
-        c.send_raw({"v": 1, "type": "WELCOME", "seq": hello["seq"], "token": TOKEN,
-                    "body": {"version": 1, "heartbeat_s": 0.5, "timeout_s": 10.0}})
-
         # A message whose seq is readable but whose body has a key not in the version: refused by its seq.
-        advance = {"t": 0.0, "dt": 1e-3, "substeps": 1, "iteration": 0, "inputs": {}}
-        expect_error(c.request("ADVANCE", 5, dict(advance, colour="blue")), 5, "bad_message")
+        expect_error(c.request("ADVANCE", 5, dict(advance(0.0, 1e-3, 0), colour="blue")), 5, "bad_message")
         # Unreadable bytes: refused with seq and in_reply_to 0.
-        c.sock.send_multipart([c.peer, b"\xc1 not msgpack"])
+        c.send_bytes(b"\xc1 not msgpack")
         expect_error(c.receive(), 0, "bad_message")
         # Before INIT, any request but INIT and BYE is bad_state.
         expect_error(c.request("SAVE", 6, {}), 6, "bad_state")
@@ -84,27 +196,45 @@ def test_runtime_answers_as_the_protocol_document_says():
         # Nor is a malformed HEARTBEAT or ERROR answered (an answer to one would arrive before READY below).
         c.send_raw({"v": 1, "type": "HEARTBEAT", "seq": 7, "token": TOKEN, "body": {"progress": "lots"}})
         c.send_raw({"v": 1, "type": "ERROR", "seq": 7, "token": TOKEN, "body": {"code": "internal"}})
-        ready = c.request("INIT", 8, {"config": config, "t0": 0.0, "interface": None, "state": b""})
-        assert ready is not None and ready["type"] == "READY" and ready["seq"] == 8, ready  # not an answer to 7
+        ready = s.init(section(SCENE, "structure"), seq=8)  # not an answer to 7
+        n = vertices(ready)
         # RESTORE before any SAVE, and ADVANCE from a time that is not the participant's: bad_state.
         expect_error(c.request("RESTORE", 9, {}), 9, "bad_state")
-        expect_error(c.request("ADVANCE", 10, dict(advance, t=0.5)), 10, "bad_state")
+        expect_error(c.request("ADVANCE", 10, advance(0.5, 1e-3, n)), 10, "bad_state")
         # A window length that is not > 0, or a start that is not finite, is out of range: bad_message.
-        expect_error(c.request("ADVANCE", 10, dict(advance, dt=0.0)), 10, "bad_message")
-        expect_error(c.request("ADVANCE", 10, dict(advance, t=float("nan"))), 10, "bad_message")
+        expect_error(c.request("ADVANCE", 10, advance(0.0, 0.0, n)), 10, "bad_message")
+        expect_error(c.request("ADVANCE", 10, advance(float("nan"), 1e-3, n)), 10, "bad_message")
         # And the participant is still well: it advances, then leaves on BYE with status 0.
-        advanced = c.request("ADVANCE", 11, advance)
+        advanced = c.request("ADVANCE", 11, advance(0.0, 1e-3, n))
         assert advanced["type"] == "ADVANCED" and abs(advanced["body"]["t"] - 1e-3) < 1e-15, advanced
         bye = c.request("BYE", 12, {})
         assert bye["type"] == "ACK" and bye["seq"] == 12, bye
-        out, _ = proc.communicate(timeout=10)
-        assert proc.returncode == 0, out
-        assert "the coordinator sent ERROR internal: a test ERROR" in out, out
+        assert s.wait(10) == 0, s.output()
+        assert "the coordinator sent ERROR internal: a test ERROR" in s.output(), s.output()
     finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait(timeout=10)
-        c.close()
+        s.close()
+
+
+def test_replies_quoting_bytes_that_are_not_utf8_are_utf8():
+    # The type name (and a config key) used to be echoed byte for byte into the ERROR message, a msgpack str
+    # that a strict reader (msgpack-python with raw=False) cannot decode.
+    for p in programs():
+        s = Session(p.argv)
+        try:
+            s.c.send_bytes(with_bad_utf8({"v": 1, "type": "QQQQ", "seq": 3, "token": TOKEN, "body": {}}, "QQQQ"))
+            reply = s.c.receive()  # would raise UnicodeDecodeError
+            assert reply is not None and reply["type"] == "ERROR", (p.name, brief(reply))
+            if p.name == "sphfsi-structure":  # rigid_plate.py cannot read such a message at all: bad_message, seq 0
+                expect_error(reply, 3, "unknown_type", mentions="\\xff\\xfe\\x1bX")
+            config = dict(p.config, KKKK=1.0)
+            s.c.send_bytes(with_bad_utf8({"v": 1, "type": "INIT", "seq": 4, "token": TOKEN, "body": {
+                "config": config, "t0": 0.0, "interface": None, "state": b""}}, "KKKK"))
+            reply = s.c.receive()
+            assert reply is not None and reply["type"] == "ERROR", (p.name, brief(reply))
+            # The participant is still well.
+            assert vertices(s.init(p.config, seq=5)) >= 0
+        finally:
+            s.close()
 
 
 if __name__ == "__main__":
