@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <mutex>
@@ -220,7 +222,14 @@ private:
                 return reply_error(m.seq, "bad_state", std::string(to_string(m.type)) + " before INIT");
             switch (m.type) {
                 case MessageType::Init: {
+                    // READY is for good (docs/protocol.md §3): a second INIT would silently rebuild the solver
+                    // under a coordinator that is mid-run. A failed INIT leaves us WELCOMED, free to retry.
+                    if (initialised_) return reply_error(m.seq, "bad_state", "INIT after a successful INIT");
                     InitRequest req = m.as<InitRequest>();
+                    // t0 becomes the solver's clock: from a NaN or infinite start every ADVANCE would fail
+                    // check_window, leaving a participant that answers but can never advance.
+                    if (!std::isfinite(req.t0))
+                        throw CodedError("bad_message", "INIT t0 = " + number(req.t0) + " is not a finite time");
                     schema::Errors errors;
                     req.config = solver_->schema().validate(req.config, solver_->kind(), errors);
                     schema::throw_if_any(errors, "INIT config");
@@ -259,6 +268,12 @@ private:
             log(std::string("internal error: ") + e.what());
             reply_error(m.seq, "internal", e.what());
         }
+    }
+
+    static std::string number(double x) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.17g", x);
+        return buf;
     }
 
     Options opt_;

@@ -215,6 +215,37 @@ def test_runtime_answers_as_the_protocol_document_says():
         s.close()
 
 
+def test_init_with_a_start_time_that_is_not_finite_is_bad_message_and_may_be_retried():
+    # A NaN or infinite t0 used to be taken as the solver's clock: every ADVANCE then failed with bad_state.
+    for p in programs():
+        s = Session(p.argv)
+        try:
+            for seq, t0 in ((2, float("nan")), (3, float("inf")), (4, -float("inf"))):
+                reply = s.c.request("INIT", seq, {"config": p.config, "t0": t0, "interface": None, "state": b""})
+                expect_error(reply, seq, "bad_message", mentions="t0")
+            # A failed INIT leaves the participant WELCOMED: INIT may be tried again.
+            n = vertices(s.init(p.config, seq=5))
+            advanced = s.c.request("ADVANCE", 6, advance(0.0, 1e-3, n))
+            assert advanced["type"] == "ADVANCED", (p.name, brief(advanced))
+        finally:
+            s.close()
+
+
+def test_init_after_ready_is_bad_state_and_leaves_the_state_alone():
+    # A second INIT used to re-initialise the solver silently, back to its t0.
+    for p in programs():
+        s = Session(p.argv)
+        try:
+            n = vertices(s.init(p.config, seq=2))
+            assert s.c.request("ADVANCE", 3, advance(0.0, 1e-3, n))["type"] == "ADVANCED"
+            reply = s.c.request("INIT", 4, {"config": p.config, "t0": 0.0, "interface": None, "state": b""})
+            expect_error(reply, 4, "bad_state", mentions="INIT")
+            advanced = s.c.request("ADVANCE", 5, advance(1e-3, 1e-3, n))  # still at t = 1 ms
+            assert advanced["type"] == "ADVANCED" and abs(advanced["body"]["t"] - 2e-3) < 1e-15, (p.name, brief(advanced))
+        finally:
+            s.close()
+
+
 def test_replies_quoting_bytes_that_are_not_utf8_are_utf8():
     # The type name (and a config key) used to be echoed byte for byte into the ERROR message, a msgpack str
     # that a strict reader (msgpack-python with raw=False) cannot decode.
