@@ -239,8 +239,10 @@ private:
                     return reply(m.seq, MessageType::Ready, std::move(r));
                 }
                 case MessageType::Advance: {
+                    const AdvanceRequest& req = m.as<AdvanceRequest>();
+                    check_inputs(req.inputs);
                     auto start = Clock::now();
-                    AdvanceReply r = solver_->advance(m.as<AdvanceRequest>(), progress_);
+                    AdvanceReply r = solver_->advance(req, progress_);
                     r.compute_s = std::chrono::duration<double>(Clock::now() - start).count();
                     last_t_ = r.t;
                     return reply(m.seq, MessageType::Advanced, std::move(r));
@@ -274,6 +276,24 @@ private:
         char buf[32];
         std::snprintf(buf, sizeof buf, "%.17g", x);
         return buf;
+    }
+
+    // The coordinator always sends exactly the inputs of the solver's kind (docs/protocol.md, ADVANCE): a
+    // missing one would leave the solver on stale or zero values, an extra one would be ignored, and either
+    // means the two sides disagree about the run. The solver says which it takes, as INIT set it up.
+    void check_inputs(const Fields& inputs) const {
+        const auto expected = solver_->advance_inputs();
+        if (!expected) return;
+        std::string takes;
+        for (const auto& name : *expected) takes += (takes.empty() ? "" : ", ") + name;
+        takes = " (this " + solver_->kind() + (takes.empty() ? " takes none)" : " takes exactly: " + takes + ")");
+        for (const auto& name : *expected)
+            if (!inputs.count(name))
+                throw CodedError("bad_message", solver_->kind() + ": ADVANCE inputs lack the field '" + name + "'" + takes);
+        for (const auto& [name, field] : inputs)
+            if (std::find(expected->begin(), expected->end(), name) == expected->end())
+                throw CodedError("bad_message", solver_->kind() + ": ADVANCE inputs have the unknown field '" +
+                                                    printable(name) + "'" + takes);
     }
 
     Options opt_;

@@ -1,5 +1,5 @@
 """The reference participant runtime (protocol/src/participant.cpp) keeps the rules of docs/protocol.md,
-§3 "Rules": this test plays the coordinator by hand against a real sphfsi-structure over
+§3 "Rules": this test plays the coordinator by hand against a real sphfsi-structure (and sphfsi-fluid) over
 127.0.0.1 and checks the answers a replacement solver's author would rely on. The checks that hold for any
 structure participant run against tests/participants/rigid_plate.py too, which must behave the same.
 Every wait is bounded."""
@@ -244,6 +244,57 @@ def test_init_after_ready_is_bad_state_and_leaves_the_state_alone():
             assert advanced["type"] == "ADVANCED" and abs(advanced["body"]["t"] - 2e-3) < 1e-15, (p.name, brief(advanced))
         finally:
             s.close()
+
+
+def test_structure_advance_takes_exactly_force():
+    # A missing `force` used to be taken as zero, an extra field ignored.
+    for p in programs():
+        s = Session(p.argv)
+        try:
+            n = vertices(s.init(p.config, seq=2))
+            expect_error(s.c.request("ADVANCE", 3, dict(advance(0.0, 1e-3, n), inputs={})), 3, "bad_message",
+                         mentions="force")
+            extra = advance(0.0, 1e-3, n, force=f8(n), colour=f8(n))
+            expect_error(s.c.request("ADVANCE", 4, extra), 4, "bad_message", mentions="colour")
+            wrong = advance(0.0, 1e-3, n, velocity=f8(n))
+            expect_error(s.c.request("ADVANCE", 5, wrong), 5, "bad_message", mentions="force")
+            # Shapes are still checked, and the right inputs still work.
+            expect_error(s.c.request("ADVANCE", 6, advance(0.0, 1e-3, n, force=f8(n + 1))), 6, "bad_message")
+            assert s.c.request("ADVANCE", 7, advance(0.0, 1e-3, n))["type"] == "ADVANCED"
+        finally:
+            s.close()
+
+
+def test_fluid_advance_takes_exactly_the_inputs_of_its_run():
+    config = section(os.path.join(harness.ROOT, "scenarios", "fluid_only.toml"), "fluid")
+    config["dp"] = 0.02
+    # A plate lying in the water: vertices 0..3, one cell.
+    plate = [0.2, 0.3, 0.3, 0.3, 0.3, 0.34, 0.2, 0.34]
+    mesh = {"vertices": f8(4, 2, plate), "cells": {"dtype": "i4", "shape": [1, 4],
+                                                    "data": struct.pack("<4i", 0, 1, 2, 3)}}
+    fluid = [os.path.join(harness.BIN, "sphfsi-fluid")]
+    s = Session(fluid)  # alone: no inputs at all
+    try:
+        s.init(config)
+        expect_error(s.c.request("ADVANCE", 3, advance(0.0, 1e-3, 0, displacement=f8(4))), 3, "bad_message",
+                     mentions="displacement")
+        assert s.c.request("ADVANCE", 4, dict(advance(0.0, 1e-3, 0), inputs={}))["type"] == "ADVANCED"
+    finally:
+        s.close()
+    s = Session(fluid)  # coupled: displacement and velocity, both
+    try:
+        s.init(config, interface=mesh)
+        expect_error(s.c.request("ADVANCE", 3, dict(advance(0.0, 1e-3, 0), inputs={})), 3, "bad_message",
+                     mentions="displacement")
+        expect_error(s.c.request("ADVANCE", 4, advance(0.0, 1e-3, 0, displacement=f8(4))), 4, "bad_message",
+                     mentions="velocity")
+        both = {"displacement": f8(4), "velocity": f8(4)}
+        expect_error(s.c.request("ADVANCE", 5, advance(0.0, 1e-3, 0, force=f8(4), **both)), 5, "bad_message",
+                     mentions="force")
+        advanced = s.c.request("ADVANCE", 6, advance(0.0, 1e-3, 0, **both))
+        assert advanced["type"] == "ADVANCED" and advanced["body"]["outputs"]["force"]["shape"] == [4, 2], advanced
+    finally:
+        s.close()
 
 
 def test_replies_quoting_bytes_that_are_not_utf8_are_utf8():

@@ -709,17 +709,19 @@ class Participant:
             raise bad("ADVANCE inputs must be a map of arrays")
         plate = self.plate
         n = plate.n_vertices
+        # The coordinator always sends exactly `force` (docs/protocol.md, ADVANCE): anything else means the two
+        # sides disagree about the run.
+        if "force" not in inputs:
+            raise bad("ADVANCE inputs lack the field 'force' (a structure takes exactly: force)")
         extra = [str(k) for k in inputs if k != "force"]
         if extra:
             raise bad("ADVANCE inputs: unknown field(s) %s; a structure takes only force" % ", ".join(sorted(extra)))
-        F = 0.0
-        if "force" in inputs:
-            dtype, shape, values = decode_array(inputs["force"], "inputs.force")
-            if dtype != "f8" or shape != [n, 2]:
-                raise bad("inputs.force must be f8 [%d, 2], got %s %s" % (n, dtype, shape))
-            if not all(math.isfinite(x) for x in values):
-                raise bad("inputs.force holds a value that is not finite")
-            F = math.fsum(values[1::2])
+        dtype, shape, values = decode_array(inputs["force"], "inputs.force")
+        if dtype != "f8" or shape != [n, 2]:
+            raise bad("inputs.force must be f8 [%d, 2], got %s %s" % (n, dtype, shape))
+        if not all(math.isfinite(x) for x in values):
+            raise bad("inputs.force holds a value that is not finite")
+        F = math.fsum(values[1::2])
         tol = 1e-9 * max(abs(plate.t), dt)
         if abs(t - plate.t) > tol:
             raise ProtocolError("bad_state", "ADVANCE t = %.17g but the plate is at t = %.17g" % (t, plate.t))
