@@ -4,6 +4,7 @@
 structure participant run against tests/participants/rigid_plate.py too, which must behave the same.
 Every wait is bounded."""
 import os
+import signal
 import struct
 import subprocess
 import tempfile
@@ -25,17 +26,19 @@ def section(path, name):
 
 
 class Program:
-    """A structure participant to start by hand and its [structure] config."""
+    """A structure participant to start by hand, its [structure] config and an ADVANCE that runs for minutes."""
 
-    def __init__(self, name, argv, config):
-        self.name, self.argv, self.config = name, argv, config
+    def __init__(self, name, argv, config, long_substeps):
+        self.name, self.argv, self.config, self.long_substeps = name, argv, config, long_substeps
 
 
 def programs():
     return [
-        Program("sphfsi-structure", [os.path.join(harness.BIN, "sphfsi-structure")], section(SCENE, "structure")),
+        Program("sphfsi-structure", [os.path.join(harness.BIN, "sphfsi-structure")], section(SCENE, "structure"),
+                2 ** 31),  # ~10 us a sub-step: hours
         Program("rigid_plate.py", ["/usr/bin/python3", os.path.join(harness.PARTICIPANTS, "rigid_plate.py")],
-                section(os.path.join(harness.SCENES, "rigid_plate_step.toml"), "structure")),
+                section(os.path.join(harness.SCENES, "rigid_plate_step.toml"), "structure"),
+                10_000_000),  # its own limit; a few us a sub-step in Python: tens of seconds
     ]
 
 
@@ -317,6 +320,104 @@ def test_replies_quoting_bytes_that_are_not_utf8_are_utf8():
             assert vertices(s.init(p.config, seq=5)) >= 0
         finally:
             s.close()
+
+
+# ---- a participant busy in a long ADVANCE --------------------------------------------------------------------
+
+def start_long_advance(p, heartbeat_s=0.2, timeout_s=1.0):
+    """A participant welcomed with these periods, initialised and busy in an ADVANCE of minutes; the
+    coordinator keeps beating until the participant's heartbeats show progress."""
+    s = Session(p.argv, heartbeat_s=heartbeat_s, timeout_s=timeout_s)
+    n = vertices(s.init(p.config))
+    s.c.send("ADVANCE", 3, advance(0.0, 1.0, n, substeps=p.long_substeps))
+    end = time.monotonic() + 20
+    while s.c.progress == 0 and time.monotonic() < end:
+        assert s.c.receive(0.1, beat_every=heartbeat_s) is None
+    assert s.c.progress > 0 and s.proc.poll() is None, (p.name, s.output())
+    return s, n
+
+
+def test_sigterm_ends_a_long_advance_at_once():
+    # The runtime's handler only set a flag, read between messages: a participant busy in a long ADVANCE
+    # outlived its coordinator (the launcher's parent-death signal is SIGTERM) at 100 % CPU.
+    for p in programs():
+        s, _ = start_long_advance(p)
+        try:
+            s.c.receive(0.5, beat_every=0.2)  # the coordinator is alive: it is the signal that ends it
+            s.proc.send_signal(signal.SIGTERM)
+            start = time.monotonic()
+            code = s.wait(5)
+            assert code == 130, (p.name, code, s.output())
+            assert time.monotonic() - start < 2.0, (p.name, time.monotonic() - start)
+            assert "signal" in s.output(), s.output()
+        finally:
+            s.close()
+
+
+def test_a_vanished_coordinator_ends_a_long_advance_within_timeout():
+    # Started by hand (no parent-death signal), a participant whose coordinator went away in the middle of
+    # a long ADVANCE only noticed after the ADVANCE, minutes later.
+    for p in programs():
+        s, _ = start_long_advance(p, timeout_s=1.0)
+        try:
+            s.c.close()  # the coordinator's socket goes away: nothing more arrives
+            start = time.monotonic()
+            code = s.wait(1.0 + 4.0)
+            assert code == 4, (p.name, code, s.output())
+            assert "silent" in s.output() or "heard nothing" in s.output(), s.output()
+            assert time.monotonic() - start > 0.5, "exited before timeout_s"
+        finally:
+            s.close()
+
+
+def test_a_long_advance_outlives_timeout_while_the_coordinator_beats_and_keeps_messages_in_order():
+    # What the heartbeat thread takes while the main thread computes: HEARTBEATs count as signs of life,
+    # anything else waits for the main thread, in order.
+    for p in programs():
+        s = Session(p.argv, heartbeat_s=0.2, timeout_s=1.0)
+        try:
+            n = vertices(s.init(p.config))
+            probe = 100_000 if p.name == "rigid_plate.py" else 10_000  # ~0.1 s
+            r = s.c.request("ADVANCE", 3, advance(0.0, 1e-3, n, substeps=probe), timeout_s=30)
+            assert r["type"] == "ADVANCED", r
+            per_step = max(r["body"]["compute_s"], 1e-6) / probe
+            substeps = max(probe, min(p.long_substeps, int(3.0 / per_step)))  # about 3 s > timeout_s
+            before = s.c.progress
+            s.c.send("ADVANCE", 20, advance(1e-3, 1e-3, n, substeps=substeps))
+            end = time.monotonic() + 10
+            while s.c.progress <= before and time.monotonic() < end:
+                assert s.c.receive(0.05, beat_every=0.2) is None
+            s.c.send_raw({"v": 1, "type": "HEARTBEAT", "seq": 0, "token": "wrong", "body": {"progress": 0}})
+            s.c.send("SAVE", 21, {})
+            s.c.send("SNAPSHOT", 22, {})
+            replies = [s.c.receive(60, beat_every=0.2) for _ in range(3)]
+            assert [(m["type"], m["seq"]) for m in replies] == [("ADVANCED", 20), ("ACK", 21), ("FRAME", 22)], brief(replies)
+            assert replies[0]["body"]["compute_s"] > 1.0, (p.name, replies[0]["body"]["compute_s"])  # > timeout_s
+            assert s.proc.poll() is None, s.output()
+            assert s.c.request("BYE", 23, {})["type"] == "ACK"
+            assert s.wait(10) == 0, s.output()
+        finally:
+            s.close()
+
+
+def test_participant_follows_a_killed_coordinator_out_of_a_long_advance():
+    # The adversarial report: the structure, busy in an ADVANCE of 10^7 sub-steps, kept running at 99 % CPU
+    # for > 45 s after its coordinator was SIGKILLed.
+    out = harness.out_dir("follow")
+    run = harness.Running("run", SCENE, "--out", out, "--quiet", "--set", "structure.time.dt_max=1e-7",
+                          "--set", "run.output_interval=1.0")
+    pid = harness.participant_pid(run.wait_for("structure connected"))
+    try:
+        time.sleep(1.5)  # INIT, then into the ADVANCE
+        run.proc.kill()
+        run.proc.wait(timeout=10)
+        deadline = time.time() + 5
+        while harness.pid_alive(pid) and time.time() < deadline:
+            time.sleep(0.05)
+        assert not harness.pid_alive(pid), "sphfsi-structure outlived a SIGKILLed coordinator"
+    finally:
+        if harness.pid_alive(pid):
+            os.kill(pid, signal.SIGKILL)
 
 
 if __name__ == "__main__":
