@@ -174,6 +174,13 @@ protocol::AdvanceReply SphSolver::advance(const protocol::AdvanceRequest& reques
     return reply;
 }
 
+// docs/protocol.md, ADVANCE: a coupled fluid receives the interface's window-end kinematics, a fluid run
+// alone no inputs.
+std::optional<std::vector<std::string>> SphSolver::advance_inputs() const {
+    if (coupling_) return std::vector<std::string>{"displacement", "velocity"};
+    return std::vector<std::string>{};
+}
+
 void SphSolver::save() {
     require_init();
     sim_->save();

@@ -1,5 +1,6 @@
 #include "sphfsi/protocol/codec.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -14,6 +15,64 @@ static_assert(std::endian::native == std::endian::little, "blobs are little-endi
 namespace {
 using Packer = Writer;
 
+// ---------- text ----------
+// The length of the well-formed UTF-8 sequence that starts at s[i], or 0 if none starts there (RFC 3629:
+// no overlong forms, no surrogates, nothing above U+10FFFF; what a strict decoder such as Python's accepts).
+std::size_t utf8_sequence(std::string_view s, std::size_t i) {
+    auto at = [&](std::size_t k) { return static_cast<unsigned char>(s[k]); };
+    const unsigned char c = at(i);
+    if (c < 0x80) return 1;
+    std::size_t n = 0;
+    unsigned char lo = 0x80, hi = 0xBF;  // the range of the second byte
+    if (c >= 0xC2 && c <= 0xDF) n = 2;
+    else if (c >= 0xE0 && c <= 0xEF) n = 3, lo = c == 0xE0 ? 0xA0 : 0x80, hi = c == 0xED ? 0x9F : 0xBF;
+    else if (c >= 0xF0 && c <= 0xF4) n = 4, lo = c == 0xF0 ? 0x90 : 0x80, hi = c == 0xF4 ? 0x8F : 0xBF;
+    else return 0;
+    if (n > s.size() - i || at(i + 1) < lo || at(i + 1) > hi) return 0;
+    for (std::size_t k = 2; k < n; ++k)
+        if ((at(i + k) & 0xC0) != 0x80) return 0;
+    return n;
+}
+
+bool is_utf8(std::string_view s) {
+    for (std::size_t i = 0, n; i < s.size(); i += n)
+        if ((n = utf8_sequence(s, i)) == 0) return false;
+    return true;
+}
+
+// `s` with each byte outside well-formed UTF-8 (and, if `controls`, each ASCII control character) as \xNN.
+std::string escaped(std::string_view s, bool controls, std::size_t max_bytes) {
+    static const char hex[] = "0123456789abcdef";
+    std::string out;
+    out.reserve(std::min(s.size(), max_bytes) + 8);
+    for (std::size_t i = 0; i < s.size();) {
+        if (i >= max_bytes) {
+            out += "...";
+            break;
+        }
+        const std::size_t n = utf8_sequence(s, i);
+        const auto c = static_cast<unsigned char>(s[i]);
+        if (n == 0 || (controls && (c < 0x20 || c == 0x7F))) {
+            out += "\\x";
+            out += hex[c >> 4];
+            out += hex[c & 0xF];
+            ++i;
+        } else {
+            out.append(s, i, n);
+            i += n;
+        }
+    }
+    return out;
+}
+
+// Every string the codec writes goes through here, so that no message it encodes carries a str that is not
+// UTF-8 (docs/protocol.md, "Envelope"), whatever went into it: an ERROR text quoting a peer's bytes, a token
+// or name from a command line. Valid text, the only kind the programs produce, is written unchanged.
+void pack_text(Packer& pk, std::string_view s) {
+    if (is_utf8(s)) pk.pack(s);
+    else pk.pack(escaped(s, false, s.size()));
+}
+
 // ---------- encoding ----------
 void pack_value(Packer& pk, const Value& v) {
     std::visit(
@@ -23,14 +82,14 @@ void pack_value(Packer& pk, const Value& v) {
             else if constexpr (std::is_same_v<T, bool>) x ? pk.pack_true() : pk.pack_false();
             else if constexpr (std::is_same_v<T, std::int64_t>) pk.pack_int64(x);
             else if constexpr (std::is_same_v<T, double>) pk.f64(x);
-            else if constexpr (std::is_same_v<T, std::string>) pk.pack(x);
+            else if constexpr (std::is_same_v<T, std::string>) pack_text(pk, x);
             else if constexpr (std::is_same_v<T, Value::Array>) {
                 pk.pack_array(static_cast<std::uint32_t>(x.size()));
                 for (const Value& e : x) pack_value(pk, e);
             } else {
                 pk.pack_map(static_cast<std::uint32_t>(x.size()));
                 for (const auto& [k, e] : x) {
-                    pk.pack(k);
+                    pack_text(pk, k);
                     pack_value(pk, e);
                 }
             }
@@ -57,7 +116,7 @@ void pack_field(Packer& pk, const Field& f) {
 void pack_fields(Packer& pk, const Fields& fields) {
     pk.pack_map(static_cast<std::uint32_t>(fields.size()));
     for (const auto& [name, f] : fields) {
-        pk.pack(name);
+        pack_text(pk, name);
         pack_field(pk, f);
     }
 }
@@ -79,11 +138,11 @@ struct BodyPacker {
     void operator()(const Empty&) { pk.pack_map(0); }
     void operator()(const Hello& h) {
         pk.pack_map(6);
-        key("name"); pk.pack(h.name);
-        key("kind"); pk.pack(h.kind);
+        key("name"); pack_text(pk, h.name);
+        key("kind"); pack_text(pk, h.kind);
         key("version_min"); pk.pack_uint32(h.version_min);
         key("version_max"); pk.pack_uint32(h.version_max);
-        key("software"); pk.pack(h.software);
+        key("software"); pack_text(pk, h.software);
         key("pid"); pk.pack_int64(h.pid);
     }
     void operator()(const Welcome& w) {
@@ -139,8 +198,8 @@ struct BodyPacker {
     }
     void operator()(const ErrorReply& e) {
         pk.pack_map(3);
-        key("code"); pk.pack(e.code);
-        key("message"); pk.pack(e.message);
+        key("code"); pack_text(pk, e.code);
+        key("message"); pack_text(pk, e.message);
         key("in_reply_to"); pk.pack_uint64(e.in_reply_to);
     }
 };
@@ -178,7 +237,7 @@ public:
         for (std::uint32_t i = 0; i < map_.size; ++i)
             if (!used_[i]) {
                 const auto& k = map_.ptr[i].key.via.str;
-                bad(where_ + " has the unknown or repeated key '" + std::string(k.ptr, k.size) + "'");
+                bad(where_ + " has the unknown or repeated key '" + printable({k.ptr, k.size}) + "'");
             }
     }
     const std::string& where() const { return where_; }
@@ -243,8 +302,8 @@ Value to_value(const msgpack::object& o, const std::string& what) {
             Value::Table t;
             for (std::uint32_t i = 0; i < o.via.map.size; ++i) {
                 std::string k = need_string(o.via.map.ptr[i].key, what + " key");
-                if (!t.emplace(k, to_value(o.via.map.ptr[i].val, what + "." + k)).second)
-                    bad(what + " repeats the key '" + k + "'");
+                if (!t.emplace(k, to_value(o.via.map.ptr[i].val, what + "." + printable(k))).second)
+                    bad(what + " repeats the key '" + printable(k) + "'");
             }
             return Value(std::move(t));
         }
@@ -257,7 +316,7 @@ NdArray<T> read_array(const msgpack::object& o, const std::string& what) {
     MapReader m(o, what);
     std::string dtype = need_string(m.need("dtype"), what + ".dtype");
     const char* want = std::is_same_v<T, double> ? "f8" : "i4";
-    if (dtype != want) bad(what + ".dtype is \"" + dtype + "\", expected \"" + want + "\"");
+    if (dtype != want) bad(what + ".dtype is \"" + printable(dtype) + "\", expected \"" + want + "\"");
     const auto& shape = m.need("shape");
     if (shape.type != msgpack::type::ARRAY || shape.via.array.size < 1 || shape.via.array.size > 4)
         bad(what + ".shape must be an array of 1 to 4 sizes");
@@ -285,7 +344,7 @@ Field read_field(const msgpack::object& o, const std::string& what) {
     std::string dtype = need_string(peek.need("dtype"), what + ".dtype");
     if (dtype == "f8") return read_array<double>(o, what);
     if (dtype == "i4") return read_array<std::int32_t>(o, what);
-    bad(what + ".dtype \"" + dtype + "\" is not one of \"f8\", \"i4\"");
+    bad(what + ".dtype \"" + printable(dtype) + "\" is not one of \"f8\", \"i4\"");
 }
 
 Fields read_fields(const msgpack::object& o, const std::string& what) {
@@ -293,8 +352,8 @@ Fields read_fields(const msgpack::object& o, const std::string& what) {
     Fields out;
     for (std::uint32_t i = 0; i < o.via.map.size; ++i) {
         std::string name = need_string(o.via.map.ptr[i].key, what + " key");
-        if (!out.emplace(name, read_field(o.via.map.ptr[i].val, what + "." + name)).second)
-            bad(what + " repeats the field '" + name + "'");
+        if (!out.emplace(name, read_field(o.via.map.ptr[i].val, what + "." + printable(name))).second)
+            bad(what + " repeats the field '" + printable(name) + "'");
     }
     return out;
 }
@@ -456,6 +515,10 @@ bool body_matches(MessageType type, const Body& body) {
 }
 }  // namespace
 
+std::string printable(std::string_view received, std::size_t max_bytes) {
+    return escaped(received, true, max_bytes);
+}
+
 std::string_view to_string(MessageType t) {
     for (const auto& [type, name] : kNames)
         if (type == t) return name;
@@ -495,7 +558,7 @@ std::string encode(const Message& m) {
     pk.pack(std::string_view("seq"));
     pk.pack_uint64(m.seq);
     pk.pack(std::string_view("token"));
-    pk.pack(m.token);
+    pack_text(pk, m.token);
     pk.pack(std::string_view("body"));
     std::visit(BodyPacker{pk}, m.body);
     return std::move(pk.bytes());
@@ -507,7 +570,7 @@ namespace {
 void read_envelope_rest(MapReader& env, Message& m, std::string& type) {
     type = need_string(env.need("type"), "envelope.type");
     m.version = need_u32(env.need("v"), "envelope.v");
-    if (!parse_message_type(type, m.type)) throw ProtocolError("unknown_type", "unknown message type \"" + type + "\"");
+    if (!parse_message_type(type, m.type)) throw ProtocolError("unknown_type", "unknown message type \"" + printable(type) + "\"");
     m.token = need_string(env.need("token"), "envelope.token");
     // Check the version before reading the body: another version's body may legitimately differ.
     bool hello = m.type == MessageType::Hello || m.type == MessageType::Error;

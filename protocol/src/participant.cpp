@@ -3,10 +3,14 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
+#include <deque>
 #include <iostream>
 #include <mutex>
 #include <thread>
@@ -50,6 +54,15 @@ void usage(const std::string& prog, const std::string& kind) {
 // One DEALER socket shared by the main thread and the heartbeat thread. ZeroMQ sockets are not
 // thread-safe, but may be used from several threads with a full memory barrier between uses: the
 // mutex gives that. The main thread never holds it for longer than one short poll.
+//
+// While the main thread computes a request (`computing_`) nobody else reads the socket, so the heartbeat
+// thread takes what arrives (take_while_computing): the coordinator's HEARTBEATs then count as signs of
+// life during a long ADVANCE. A HEARTBEAT is dropped there (the main loop ignores them too); anything else
+// is kept in `pending_`, in arrival order, and the main thread reads `pending_` before the socket.
+// `computing_` is changed, and `pending_` filled and emptied, under the same mutex as every socket use: a
+// message is either taken by the heartbeat thread before the main thread clears `computing_` (and then
+// waits in `pending_`, ahead of anything still in the socket) or read from the socket by the main thread
+// afterwards. None is lost or reordered.
 class Link {
 public:
     Link(zmq::context_t& ctx, const std::string& endpoint) : socket_(ctx, zmq::socket_type::dealer) {
@@ -62,30 +75,85 @@ public:
         std::lock_guard lock(mutex_);
         socket_.send(zmq::buffer(bytes), zmq::send_flags::none);
     }
-    // Checks for a message for up to `spin` (polling without sleeping, yielding the core between
-    // polls), then waits up to `ms` asleep; returns false on timeout. See `wait_spin` above for why.
+    // Without blocking: when ZeroMQ's queue is full the coordinator is not reading anyway, and a heartbeat
+    // thread blocked in send, holding the mutex, could no longer notice a signal or a silent coordinator.
+    void send_heartbeat(const Message& m) {
+        std::string bytes = encode(m);
+        std::lock_guard lock(mutex_);
+        (void)socket_.send(zmq::buffer(bytes), zmq::send_flags::dontwait);
+    }
+    // Main thread. Returns a message kept by the heartbeat thread if there is one; otherwise checks the
+    // socket for up to `spin` (polling without sleeping, yielding the core between polls), then waits up
+    // to `ms` asleep; returns false on timeout. See `wait_spin` above for why.
     bool receive(zmq::message_t& out, int ms, std::chrono::microseconds spin = {}) {
         try {
+            {
+                std::lock_guard lock(mutex_);
+                if (!pending_.empty()) {
+                    out = std::move(pending_.front());
+                    pending_.pop_front();
+                    return true;
+                }
+            }
             for (const auto until = Clock::now() + spin; spin.count() > 0 && Clock::now() < until;) {
                 {
                     std::lock_guard lock(mutex_);
-                    if (socket_.recv(out, zmq::recv_flags::dontwait)) return true;
+                    if (socket_.recv(out, zmq::recv_flags::dontwait)) return heard();
                 }
                 std::this_thread::yield();
             }
             std::lock_guard lock(mutex_);
             zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
             if (zmq::poll(&item, 1, std::chrono::milliseconds(ms)) <= 0) return false;
-            return static_cast<bool>(socket_.recv(out, zmq::recv_flags::dontwait));
+            return socket_.recv(out, zmq::recv_flags::dontwait) && heard();
         } catch (const zmq::error_t& e) {
             if (e.num() == EINTR) return false;  // a signal: the caller checks whether to stop
             throw;
         }
     }
+    // Main thread: set while it handles a request, from taking it to having sent the reply.
+    void set_computing(bool on) {
+        std::lock_guard lock(mutex_);
+        computing_ = on;
+    }
+    bool computing() const { return computing_.load(); }
+    // Heartbeat thread: while the main thread computes, takes every message that has arrived (see above).
+    void take_while_computing() {
+        std::lock_guard lock(mutex_);
+        try {
+            zmq::message_t m;
+            while (computing_ && socket_.recv(m, zmq::recv_flags::dontwait)) {
+                heard();
+                if (!is_heartbeat(m)) pending_.push_back(std::move(m));
+            }
+        } catch (const zmq::error_t& e) {
+            if (e.num() != EINTR) throw;
+        }
+    }
+    // Seconds since a message last arrived, taken by either thread.
+    double silent_s() const {
+        return std::chrono::duration<double>(Clock::now().time_since_epoch() - Clock::duration(last_heard_.load()))
+            .count();
+    }
 
 private:
+    bool heard() {
+        last_heard_ = Clock::now().time_since_epoch().count();
+        return true;
+    }
+    static bool is_heartbeat(const zmq::message_t& m) {
+        try {
+            return decode(m.data(), m.size()).type == MessageType::Heartbeat;
+        } catch (const std::exception&) {
+            return false;  // malformed: the main thread answers or logs it
+        }
+    }
+
     zmq::socket_t socket_;
     std::mutex mutex_;
+    std::deque<zmq::message_t> pending_;
+    std::atomic<bool> computing_{false};
+    std::atomic<Clock::rep> last_heard_{Clock::now().time_since_epoch().count()};
 };
 
 class Runtime {
@@ -98,13 +166,22 @@ public:
         link_ = &link;
         if (!handshake()) return 3;
         std::thread beat([this] { heartbeat_loop(); });
-        int code = serve();
-        {
-            std::lock_guard lock(beat_mutex_);
-            stopping_ = true;
+        auto stop_beat = [&] {
+            {
+                std::lock_guard lock(beat_mutex_);
+                stopping_ = true;
+            }
+            beat_cv_.notify_all();
+            beat.join();
+        };
+        int code = 0;
+        try {
+            code = serve();
+        } catch (...) {
+            stop_beat();  // a joinable std::thread must not be destroyed
+            throw;
         }
-        beat_cv_.notify_all();
-        beat.join();
+        stop_beat();
         return code;
     }
 
@@ -153,20 +230,51 @@ private:
         return false;
     }
 
+    // Sends HEARTBEAT every heartbeat_s. While the main thread computes, it is the only thread that can
+    // see what the main loop checks between messages (a request can run for minutes: an ADVANCE of
+    // millions of sub-steps), so it also
+    //  - takes arriving messages (Link::take_while_computing), which keeps "last heard" current;
+    //  - ends the process with status 130 once SIGTERM/SIGINT has set g_stop: the launcher's parent-death
+    //    signal when the coordinator dies, or a user's kill, must not wait for the request to finish;
+    //  - ends it with status 4 when the coordinator has been silent for more than timeout_s: one started
+    //    by hand (--connect) gets no parent-death signal, and its coordinator may vanish mid-request.
+    // The solver cannot be interrupted, and the reply would have nobody to go to, so it calls std::_Exit
+    // after a log line: no destructor runs under the main thread's feet. The statuses are those the main
+    // loop returns for the same reasons (docs/protocol.md, BYE); between requests it leaves both checks to
+    // the main loop, which returns normally. It wakes at least every 0.1 s, so that a signal is acted on
+    // within 0.1 s whatever heartbeat_s.
     void heartbeat_loop() {
+        double tick_s = heartbeat_s_;
+        if (!(tick_s >= 0.001)) tick_s = 0.001;  // also a NaN
+        tick_s = std::min(tick_s, 0.1);
+        const auto period = std::chrono::duration<double>(heartbeat_s_);
         std::unique_lock lock(beat_mutex_);
         std::uint64_t seq = 0;
+        auto next_beat = Clock::now() + period;
         while (!stopping_) {
-            beat_cv_.wait_for(lock, std::chrono::duration<double>(heartbeat_s_), [this] { return stopping_; });
+            beat_cv_.wait_for(lock, std::chrono::duration<double>(tick_s), [this] { return stopping_; });
             if (stopping_) break;
+            if (link_->computing()) {
+                link_->take_while_computing();
+                if (g_stop) quit(130, "stopped by signal in the middle of a request; exiting at once");
+                if (const double silent = link_->silent_s(); silent > timeout_s_)
+                    quit(4, "the coordinator has been silent for " + std::to_string(silent) +
+                                " s while we computed; exiting at once");
+            }
+            if (Clock::now() < next_beat) continue;
+            next_beat = Clock::now() + period;
             Message m = make_message(MessageType::Heartbeat, ++seq, opt_.token, Heartbeat{progress_.steps.load()});
             m.version = version_;
-            link_->send(m);
+            link_->send_heartbeat(m);
         }
     }
 
+    [[noreturn]] void quit(int status, const std::string& why) const {
+        log(why);
+        std::_Exit(status);
+    }
+
     int serve() {
-        auto last_heard = Clock::now();
         const auto spin = wait_spin();
         bool just_replied = false;  // spin only in the first wait after a request was answered
         zmq::message_t raw;
@@ -178,14 +286,13 @@ private:
             const bool got = link_->receive(raw, 100, just_replied ? spin : std::chrono::microseconds{});
             just_replied = false;
             if (!got) {
-                double silent = std::chrono::duration<double>(Clock::now() - last_heard).count();
+                const double silent = link_->silent_s();
                 if (silent > timeout_s_) {
                     log("the coordinator has been silent for " + std::to_string(silent) + " s; exiting");
                     return 4;
                 }
                 continue;
             }
-            last_heard = Clock::now();
             Message m;
             try {
                 m = decode(raw.data(), raw.size());
@@ -209,7 +316,9 @@ private:
                 reply(m.seq, MessageType::Ack);
                 return 0;
             }
+            link_->set_computing(true);  // from here to the reply the heartbeat thread watches (heartbeat_loop)
             handle(m);
+            link_->set_computing(false);
             just_replied = true;
         }
     }
@@ -220,7 +329,14 @@ private:
                 return reply_error(m.seq, "bad_state", std::string(to_string(m.type)) + " before INIT");
             switch (m.type) {
                 case MessageType::Init: {
+                    // READY is for good (docs/protocol.md §3): a second INIT would silently rebuild the solver
+                    // under a coordinator that is mid-run. A failed INIT leaves us WELCOMED, free to retry.
+                    if (initialised_) return reply_error(m.seq, "bad_state", "INIT after a successful INIT");
                     InitRequest req = m.as<InitRequest>();
+                    // t0 becomes the solver's clock: from a NaN or infinite start every ADVANCE would fail
+                    // check_window, leaving a participant that answers but can never advance.
+                    if (!std::isfinite(req.t0))
+                        throw CodedError("bad_message", "INIT t0 = " + number(req.t0) + " is not a finite time");
                     schema::Errors errors;
                     req.config = solver_->schema().validate(req.config, solver_->kind(), errors);
                     schema::throw_if_any(errors, "INIT config");
@@ -230,8 +346,10 @@ private:
                     return reply(m.seq, MessageType::Ready, std::move(r));
                 }
                 case MessageType::Advance: {
+                    const AdvanceRequest& req = m.as<AdvanceRequest>();
+                    check_inputs(req.inputs);
                     auto start = Clock::now();
-                    AdvanceReply r = solver_->advance(m.as<AdvanceRequest>(), progress_);
+                    AdvanceReply r = solver_->advance(req, progress_);
                     r.compute_s = std::chrono::duration<double>(Clock::now() - start).count();
                     last_t_ = r.t;
                     return reply(m.seq, MessageType::Advanced, std::move(r));
@@ -259,6 +377,30 @@ private:
             log(std::string("internal error: ") + e.what());
             reply_error(m.seq, "internal", e.what());
         }
+    }
+
+    static std::string number(double x) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.17g", x);
+        return buf;
+    }
+
+    // The coordinator always sends exactly the inputs of the solver's kind (docs/protocol.md, ADVANCE): a
+    // missing one would leave the solver on stale or zero values, an extra one would be ignored, and either
+    // means the two sides disagree about the run. The solver says which it takes, as INIT set it up.
+    void check_inputs(const Fields& inputs) const {
+        const auto expected = solver_->advance_inputs();
+        if (!expected) return;
+        std::string takes;
+        for (const auto& name : *expected) takes += (takes.empty() ? "" : ", ") + name;
+        takes = " (this " + solver_->kind() + (takes.empty() ? " takes none)" : " takes exactly: " + takes + ")");
+        for (const auto& name : *expected)
+            if (!inputs.count(name))
+                throw CodedError("bad_message", solver_->kind() + ": ADVANCE inputs lack the field '" + name + "'" + takes);
+        for (const auto& [name, field] : inputs)
+            if (std::find(expected->begin(), expected->end(), name) == expected->end())
+                throw CodedError("bad_message", solver_->kind() + ": ADVANCE inputs have the unknown field '" +
+                                                    printable(name) + "'" + takes);
     }
 
     Options opt_;

@@ -98,6 +98,9 @@ AdvanceReply StructureSolver::advance(const AdvanceRequest& request, Progress& p
     return reply;
 }
 
+// docs/protocol.md, ADVANCE: a structure always receives `force`, zeros when nothing acts on it.
+std::optional<std::vector<std::string>> StructureSolver::advance_inputs() const { return std::vector<std::string>{"force"}; }
+
 void StructureSolver::save() { saved_ = dyn().state(); }
 
 void StructureSolver::restore() {

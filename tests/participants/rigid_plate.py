@@ -35,15 +35,18 @@ SNAPSHOT fields: `y`, `v`, `force_y` f8 [1, 1]; `energy` f8 [1, 3] = kinetic, sp
 y = 0), work done by the external force since the start (exact for piecewise constant force: sum F dy).
 
 Exit status: 0 after BYE; 2 bad command line; 3 refused by the coordinator (ERROR to HELLO, unusable WELCOME,
-or no WELCOME within 30 s); 4 coordinator silent for timeout_s.
+or no WELCOME within 30 s); 4 coordinator silent for timeout_s, also in the middle of a request; 130 SIGTERM or
+SIGINT, also in the middle of a request (as the C++ participant runtime, protocol/src/participant.cpp).
 
 The analytic SDOF responses `step_response` and `ramp_response` (for comparing coupled runs) need nothing but the
 standard library; zmq and msgpack are only imported when the participant actually runs, so
 `from rigid_plate import step_response` works anywhere.
 """
 
+import collections
 import math
 import os
+import signal
 import struct
 import sys
 import threading
@@ -439,6 +442,13 @@ class Participant:
         self.params = None
         self.stop = threading.Event()
         self.hb_thread = None
+        # While the main thread handles a request (`computing`), the heartbeat thread takes what arrives:
+        # a well-formed coordinator HEARTBEAT refreshes `last_heard`, anything else waits in `pending`, in
+        # arrival order, and recv() returns `pending` before reading the socket. Both change under
+        # self.lock, as every socket use, so nothing is lost or reordered (see _heartbeat_loop).
+        self.computing = False
+        self.pending = collections.deque()
+        self.last_heard = time.monotonic()
 
     # -- sending -----------------------------------------------------------------------------------------------
     def _next_seq(self):
@@ -468,12 +478,39 @@ class Participant:
         body = {"code": code, "message": message, "in_reply_to": in_reply_to}
         self.send("ERROR", in_reply_to, body)  # a reply carries the seq it answers; 0 if that was unreadable
 
+    def _is_plain_heartbeat(self, frames):
+        """Whether the main loop would drop these frames silently: a well-formed HEARTBEAT of this session."""
+        if len(frames) != 1:
+            return False
+        try:
+            env = self.msgpack.unpackb(frames[0], raw=False, strict_map_key=True)
+        except Exception:
+            return False
+        return (isinstance(env, dict) and set(env) == set(ENVELOPE_KEYS) and env["type"] == "HEARTBEAT"
+                and env["v"] == self.version and env["token"] == self.token
+                and type(env["seq"]) is int and env["seq"] >= 0 and isinstance(env["body"], dict)
+                and set(env["body"]) == {"progress"} and type(env["body"]["progress"]) is int)
+
     def _heartbeat_loop(self):
+        # While the main thread computes (an ADVANCE may take many seconds) it reads nothing, so this thread
+        # takes the arriving messages and ends the process (os._exit: the computation cannot be stopped, and
+        # its result has nobody to go to) when the coordinator has been silent for more than timeout_s, as
+        # the C++ runtime does. Between requests the main loop checks the silence itself.
         period = max(0.001, 0.5 * self.heartbeat_s)
         while True:
             with self.lock:
                 if self.stop.is_set():
                     return
+                if self.computing:
+                    while self.sock.poll(0, self.zmq.POLLIN):
+                        frames = self.sock.recv_multipart(self.zmq.NOBLOCK)
+                        self.last_heard = time.monotonic()
+                        if not self._is_plain_heartbeat(frames):
+                            self.pending.append(frames)
+                    silent = time.monotonic() - self.last_heard
+                    if silent > self.timeout_s:
+                        log("heard nothing from the coordinator for %.3g s while computing; exiting" % silent)
+                        os._exit(4)
                 try:
                     self.sock.send(self._pack("HEARTBEAT", self._next_seq(), {"progress": self.progress}),
                                    self.zmq.NOBLOCK)
@@ -492,7 +529,10 @@ class Participant:
         slice_ms = max(1, min(20, int(self.heartbeat_s * 250)))
         while True:
             with self.lock:
+                if self.pending:
+                    return self.pending.popleft()
                 if self.sock.poll(slice_ms, self.zmq.POLLIN):
+                    self.last_heard = time.monotonic()
                     return self.sock.recv_multipart(self.zmq.NOBLOCK)
             if time.monotonic() >= deadline:
                 return None
@@ -512,7 +552,13 @@ class Participant:
                         raise Exit(3)
                     log("heard nothing from the coordinator for %g s; exiting" % wait)
                     raise Exit(4)
-                self.handle(frames)
+                with self.lock:
+                    self.computing = True
+                try:
+                    self.handle(frames)
+                finally:
+                    with self.lock:
+                        self.computing = False
         except Exit as e:
             self.close(linger_ms=2000 if e.status == 0 else 0)
             return e.status
@@ -709,17 +755,19 @@ class Participant:
             raise bad("ADVANCE inputs must be a map of arrays")
         plate = self.plate
         n = plate.n_vertices
+        # The coordinator always sends exactly `force` (docs/protocol.md, ADVANCE): anything else means the two
+        # sides disagree about the run.
+        if "force" not in inputs:
+            raise bad("ADVANCE inputs lack the field 'force' (a structure takes exactly: force)")
         extra = [str(k) for k in inputs if k != "force"]
         if extra:
             raise bad("ADVANCE inputs: unknown field(s) %s; a structure takes only force" % ", ".join(sorted(extra)))
-        F = 0.0
-        if "force" in inputs:
-            dtype, shape, values = decode_array(inputs["force"], "inputs.force")
-            if dtype != "f8" or shape != [n, 2]:
-                raise bad("inputs.force must be f8 [%d, 2], got %s %s" % (n, dtype, shape))
-            if not all(math.isfinite(x) for x in values):
-                raise bad("inputs.force holds a value that is not finite")
-            F = math.fsum(values[1::2])
+        dtype, shape, values = decode_array(inputs["force"], "inputs.force")
+        if dtype != "f8" or shape != [n, 2]:
+            raise bad("inputs.force must be f8 [%d, 2], got %s %s" % (n, dtype, shape))
+        if not all(math.isfinite(x) for x in values):
+            raise bad("inputs.force holds a value that is not finite")
+        F = math.fsum(values[1::2])
         tol = 1e-9 * max(abs(plate.t), dt)
         if abs(t - plate.t) > tol:
             raise ProtocolError("bad_state", "ADVANCE t = %.17g but the plate is at t = %.17g" % (t, plate.t))
@@ -903,6 +951,13 @@ def main(argv):
     token = args.token if args.token is not None else os.environ.get("SPHFSI_TOKEN")
     if not token:
         ap.error("no token: pass --token or set SPHFSI_TOKEN")
+    def on_signal(signum, frame):
+        # The handler runs in the main thread between bytecodes, so also in the middle of an ADVANCE: exit at
+        # once with the C++ runtime's status (the launcher's parent-death signal is SIGTERM).
+        log("stopped by signal %d; exiting" % signum)
+        os._exit(130)
+    signal.signal(signal.SIGTERM, on_signal)
+    signal.signal(signal.SIGINT, on_signal)
     try:
         participant = Participant(args.connect, args.name, token)
     except Exception as e:

@@ -18,6 +18,7 @@ public:
     const schema::TableSchema& schema() const override;
     protocol::InitReply init(const protocol::InitRequest& request) override;
     protocol::AdvanceReply advance(const protocol::AdvanceRequest& request, protocol::Progress& progress) override;
+    std::optional<std::vector<std::string>> advance_inputs() const override;  // coupled: displacement, velocity
     void save() override;
     void restore() override;
     protocol::Fields snapshot() override;

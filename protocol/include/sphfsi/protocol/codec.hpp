@@ -3,6 +3,7 @@
 // every type, size and key is checked, and any violation is a ProtocolError, never a crash.
 #include <cstddef>
 #include <string>
+#include <string_view>
 
 #include "sphfsi/protocol/message.hpp"
 
@@ -19,5 +20,12 @@ Message decode(const void* data, std::size_t size, const DecodeLimits& limits = 
 
 // Value <-> msgpack (config trees travel inside INIT and READY).
 void encode_value(std::string& out, const Value& v);
+
+// A string received from a peer, made fit to quote in an error text or a log line: every byte that is not
+// part of valid UTF-8, and every ASCII control character, becomes `\xNN`; beyond `max_bytes` of input the
+// rest is cut and "..." appended. An error text goes back in ERROR `message`, a msgpack str, which must be
+// UTF-8 (docs/protocol.md, "Envelope"): quoting the received bytes as they are would make our own reply
+// malformed. Use it wherever a received string (a type, key, dtype or field name) goes into a text.
+std::string printable(std::string_view received, std::size_t max_bytes = 80);
 
 }  // namespace sphfsi::protocol

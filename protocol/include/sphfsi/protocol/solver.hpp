@@ -88,6 +88,11 @@ public:
     virtual const schema::TableSchema& schema() const = 0;
     virtual InitReply init(const InitRequest& request) = 0;
     virtual AdvanceReply advance(const AdvanceRequest& request, Progress& progress) = 0;
+    // The names of the ADVANCE inputs this solver takes, as its last successful init() set it up: the
+    // coordinator always sends exactly these (docs/protocol.md, ADVANCE), and the participant runtime refuses
+    // a request with one missing or one more (bad_message) before advance() sees it. advance() itself
+    // accepts what it is given (tests drive it without inputs). std::nullopt: no check.
+    virtual std::optional<std::vector<std::string>> advance_inputs() const { return std::nullopt; }
     virtual void save() = 0;     // remember the current state (implicit coupling window start)
     virtual void restore() = 0;  // go back to the saved state
     virtual Fields snapshot() = 0;                   // fields for a record frame

@@ -19,6 +19,7 @@ public:
     // Takes `substeps` equal steps (0: ceil(dt / dt_wanted)) under the scene loads plus the vertex
     // forces inputs["force"] (N per metre of depth, times section.depth) held constant over the window.
     protocol::AdvanceReply advance(const protocol::AdvanceRequest& request, protocol::Progress& progress) override;
+    std::optional<std::vector<std::string>> advance_inputs() const override;  // {"force"}
     void save() override;
     void restore() override;
     protocol::Fields snapshot() override;
