@@ -90,6 +90,7 @@ void Hub::await_hellos(const std::vector<std::string>& roles) {
 }
 
 void Hub::goodbye(double timeout_s) {
+    closing_ = true;  // exits are expected now: the launcher reaps them and reports any unclean one
     std::map<std::string, std::uint64_t> pending;
     for (const auto& [role, peer] : peers_) {
         try {
@@ -245,7 +246,7 @@ void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) 
 }
 
 void Hub::check_liveness() {
-    if (launcher_)
+    if (launcher_ && !closing_)
         if (auto exited = launcher_->poll_exited())
             throw ParticipantFailure(exited->first, "died", exited->second);
     for (const auto& [role, peer] : peers_) {

@@ -105,6 +105,7 @@ private:
     std::uint64_t seq_ = 0;
     std::chrono::steady_clock::time_point last_beat_sent_;
     double messaging_s_ = 0.0;
+    bool closing_ = false;  // goodbye() has begun
 };
 
 }  // namespace sphfsi::coordinator
