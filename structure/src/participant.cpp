@@ -10,6 +10,20 @@ namespace sphfsi::structure {
 
 using namespace sphfsi::protocol;
 
+namespace {
+// The model is a slab of depth b (section.depth) and its energies are those of the slab; on the wire, as
+// every 2D quantity, they are per metre of depth (docs/protocol.md §4), so that the coordinator's energy
+// checks add them to the fluid's J/m.
+Energies per_metre_of_depth(const FrameDynamics& d) {
+    Energies e = d.energies();
+    const double b = d.config().section.depth;
+    e.kinetic /= b;
+    e.strain /= b;
+    e.external_work /= b;
+    return e;
+}
+}  // namespace
+
 const schema::TableSchema& StructureSolver::schema() const { return scene_schema(); }
 
 FrameDynamics& StructureSolver::dyn() {
@@ -86,7 +100,7 @@ AdvanceReply StructureSolver::advance(const AdvanceRequest& request, Progress& p
     reply.substeps = n;
     reply.outputs["displacement"] = interface_->displacement(d.state().u);
     reply.outputs["velocity"] = interface_->velocity(d.state().u, d.state().v);
-    const Energies e = d.energies();
+    const Energies e = per_metre_of_depth(d);
     double umax = 0;
     for (int i = 0; i < d.model().node_count(); ++i) umax = std::max(umax, d.state().u.segment<2>(3 * i).norm());
     reply.stats = Value(Value::Table{{"newton_iterations_max", Value(max_iterations)},
@@ -126,7 +140,7 @@ Fields StructureSolver::snapshot() {
         elements(i, 0) = m.elements[i].n1;
         elements(i, 1) = m.elements[i].n2;
     }
-    const Energies e = d.energies();
+    const Energies e = per_metre_of_depth(d);
     Fields f;
     f["nodes"] = std::move(nodes);
     f["displacement"] = std::move(disp);

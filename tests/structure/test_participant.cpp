@@ -186,6 +186,34 @@ TEST_CASE("snapshot fields") {
     CHECK(e(0, 2) > 0);
 }
 
+TEST_CASE("energies go on the wire per metre of depth, like every 2D quantity") {
+    // A slab twice as deep is twice as stiff and heavy and takes twice the force from the same fluid pressure
+    // (N/m times depth): it moves the same, and its energies per metre of depth are the same. Before
+    // 2026-11-25 they were the slab's totals, which the coordinator added to the fluid's J/m.
+    auto run = [](double depth) {
+        Value scene = coupled_scene();
+        set(scene, "section.depth", Value(depth));
+        StructureSolver s;
+        s.init(request(scene));
+        Progress p;
+        AdvanceReply r;
+        double t = 0;
+        for (int k = 0; k < 5; ++k) t = (r = s.advance(window(t, 1e-3, 2, forces(s, 50.0)), p)).t;
+        return std::make_pair(r, s.snapshot());
+    };
+    const auto [one, frame_one] = run(1.0);
+    const auto [two, frame_two] = run(2.0);
+    const F64Array &da = array(one.outputs, "displacement"), &db = array(two.outputs, "displacement");
+    for (std::size_t i = 0; i < da.values.size(); ++i) CHECK(db.values[i] == doctest::Approx(da.values[i]).epsilon(1e-9));
+    for (const char* name : {"kinetic_energy", "strain_energy", "external_work"}) {
+        const double a = one.stats.at(name).as_double(), b = two.stats.at(name).as_double();
+        CHECK(a > 0);
+        CHECK(b == doctest::Approx(a).epsilon(1e-9));
+    }
+    for (std::size_t k = 0; k < 3; ++k)
+        CHECK(array(frame_two, "energy")(0, k) == doctest::Approx(array(frame_one, "energy")(0, k)).epsilon(1e-9));
+}
+
 TEST_CASE("errors carry the protocol's codes") {
     Value bad = coupled_scene();
     set(bad, "material.E", Value(-1.0));
