@@ -199,7 +199,7 @@ private:
 
     bool handshake() {
         Hello h{opt_.name, solver_->kind(), kOldestSupportedVersion, kProtocolVersion,
-                "sphfsi-" + solver_->kind() + " (protocol " + std::to_string(kProtocolVersion) + ")", ::getpid()};
+                "sphfsi-" + solver_->kind() + " " + SPHFSI_VERSION, ::getpid()};  // the log adds the protocol version
         Message hello = make_message(MessageType::Hello, 1, opt_.token, h);
         hello.version = kProtocolVersion;
         link_->send(hello);
