@@ -26,7 +26,7 @@ const F64Array* find_f64(const protocol::Fields& fields, const char* name) {
     auto it = fields.find(name);
     if (it == fields.end()) return nullptr;
     const auto* a = std::get_if<F64Array>(&it->second);
-    if (!a) throw SolverError("bad_config", std::string("input '") + name + "' must be f8");
+    if (!a) throw SolverError("bad_message", std::string("input '") + name + "' must be f8");
     return a;
 }
 
@@ -138,8 +138,8 @@ protocol::AdvanceReply SphSolver::advance(const protocol::AdvanceRequest& reques
         try {
             coupling_->begin_window(t, request.dt, find_f64(request.inputs, "displacement"),
                                     find_f64(request.inputs, "velocity"));
-        } catch (const std::invalid_argument& e) {
-            throw SolverError("bad_config", e.what());
+        } catch (const std::invalid_argument& e) {  // an input of the wrong shape: a bad array size
+            throw SolverError("bad_message", e.what());
         }
     }
     const WindowStats ws = sim_->advance(t + request.dt, request.substeps, [&] { progress.tick(); });
