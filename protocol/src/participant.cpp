@@ -8,7 +8,6 @@
 #include <cmath>
 #include <condition_variable>
 #include <csignal>
-#include <cstdio>
 #include <cstdlib>
 #include <deque>
 #include <iostream>
@@ -336,7 +335,7 @@ private:
                     // t0 becomes the solver's clock: from a NaN or infinite start every ADVANCE would fail
                     // check_window, leaving a participant that answers but can never advance.
                     if (!std::isfinite(req.t0))
-                        throw CodedError("bad_message", "INIT t0 = " + number(req.t0) + " is not a finite time");
+                        throw CodedError("bad_message", "INIT t0 = " + seconds(req.t0) + " is not a finite time");
                     schema::Errors errors;
                     req.config = solver_->schema().validate(req.config, solver_->kind(), errors);
                     schema::throw_if_any(errors, "INIT config");
@@ -377,12 +376,6 @@ private:
             log(std::string("internal error: ") + e.what());
             reply_error(m.seq, "internal", e.what());
         }
-    }
-
-    static std::string number(double x) {
-        char buf[32];
-        std::snprintf(buf, sizeof buf, "%.17g", x);
-        return buf;
     }
 
     // The coordinator always sends exactly the inputs of the solver's kind (docs/protocol.md, ADVANCE): a
