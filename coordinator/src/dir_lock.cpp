@@ -24,7 +24,7 @@ DirLock::DirLock(const std::filesystem::path& dir) {
         if (err != EWOULDBLOCK) throw std::runtime_error("cannot lock " + file.string() + ": " + std::strerror(err));
         throw std::runtime_error(dir.string() + " is in use by another sphfsi run" +
                                  (n > 0 ? " (pid " + std::string(holder, static_cast<std::size_t>(n)) + ")" : "") +
-                                 "; wait for it to end or choose another --out");
+                                 "; wait for it to end");
     }
     const std::string pid = std::to_string(::getpid());
     if (::ftruncate(fd_, 0) != 0 || ::pwrite(fd_, pid.data(), pid.size(), 0) < 0) {

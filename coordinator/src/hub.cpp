@@ -12,6 +12,9 @@ volatile std::sig_atomic_t g_interrupted = 0;
 
 namespace {
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+ParticipantFailure reported(const std::string& role, const ErrorReply& e) {
+    return ParticipantFailure(role, e.code, "reported " + printable(e.code) + ": " + printable(e.message, 2000));
+}
 std::string fmt_s(double s) {
     char buf[32];
     std::snprintf(buf, sizeof buf, "%.1f s", s);
@@ -64,10 +67,7 @@ Message Hub::await_reply(const std::string& role, std::uint64_t seq) {
         if (auto it = box.find(seq); it != box.end()) {
             Message m = std::move(it->second);
             box.erase(it);
-            if (m.type == MessageType::Error) {
-                const auto& e = m.as<ErrorReply>();
-                throw ParticipantFailure(role, e.code, "reported " + e.code + ": " + e.message);
-            }
+            if (m.type == MessageType::Error) throw reported(role, m.as<ErrorReply>());
             return m;
         }
         pump(50);
@@ -182,10 +182,8 @@ void Hub::file_reply(const std::string& role, Message m) {
     auto& open = open_[role];
     auto request = open.find(m.seq);
     if (request == open.end()) {
-        if (m.type == MessageType::Error) {  // e.g. seq 0: it could not read our request; its words still count
-            const auto& e = m.as<ErrorReply>();
-            throw ParticipantFailure(role, e.code, "reported " + e.code + ": " + e.message);
-        }
+        // e.g. seq 0: it could not read our request; its words still count
+        if (m.type == MessageType::Error) throw reported(role, m.as<ErrorReply>());
         std::string open_list;
         for (const auto& [seq, r] : open) open_list += (open_list.empty() ? "" : ", ") + std::string(to_string(r.type)) + " " + std::to_string(seq);
         throw ParticipantFailure(role, "garbage", "sent " + std::string(to_string(m.type)) + " with seq " + std::to_string(m.seq) +
@@ -230,7 +228,8 @@ void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) 
     if (peers_.count(h.name)) return refuse(m.seq, "refused", "'" + h.name + "' is already connected");
     // A role is what the scene needs and the kind what the program is; the roles are named after the kinds.
     if (h.kind != h.name)
-        return refuse(m.seq, "refused", "'" + h.name + "' says it is a " + h.kind + " program (HELLO kind); the role needs a " + h.name);
+        return refuse(m.seq, "refused", "'" + printable(h.name) + "' says it is a " + printable(h.kind) +
+                                            " program (HELLO kind); the role needs a " + printable(h.name));
     identity_role_[id] = h.name;
     role_identity_[h.name] = id;
     PeerInfo& p = peers_[h.name];
@@ -268,7 +267,8 @@ void Hub::check_liveness() {
     if (seconds_since(last_beat_sent_) >= timing_.heartbeat_s) {
         last_beat_sent_ = Clock::now();
         for (const auto& [role, peer] : peers_) {
-            Message m = make_message(MessageType::Heartbeat, ++seq_, token_, Heartbeat{0});
+            // Their own counter (docs/protocol.md §2): request numbers stay 1, 2, 3, ... per run.
+            Message m = make_message(MessageType::Heartbeat, ++beat_seq_, token_, Heartbeat{0});
             m.version = peer.version;
             send_raw(identity_of(role), m);
         }

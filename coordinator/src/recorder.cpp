@@ -6,12 +6,13 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "sphfsi/protocol/codec.hpp"
+
 namespace sphfsi::coordinator {
 namespace {
 std::vector<hsize_t> row_shape_of(const std::vector<std::uint64_t>& shape) { return {shape.begin(), shape.end()}; }
+}  // namespace
 
-// A name that can be an HDF5 dataset or attribute name as it is, and reads the same in h5py, ParaView and a
-// shell: participants choose their field names, so the rule is checked, never assumed.
 bool plain_name(const std::string& name) {
     if (name.empty() || name.size() > 128 || name[0] == '.') return false;
     for (char c : name)
@@ -19,11 +20,9 @@ bool plain_name(const std::string& name) {
     return true;
 }
 
-std::string quoted(const std::string& name) {
-    std::string out = "'";
-    for (char c : name.substr(0, 64)) out += std::isprint(static_cast<unsigned char>(c)) ? c : '?';
-    return out + (name.size() > 64 ? "...'" : "'");
-}
+namespace {
+
+std::string quoted(const std::string& name) { return "'" + protocol::printable(name, 64) + "'"; }
 
 void check_info_keys(const std::string& prefix, const Value& v) {
     if (!v.is_table()) return;

@@ -197,8 +197,10 @@ int Runner::execute() {
 
 void Runner::initialise(std::optional<Checkpoint>& resume) {
     const Value& run = scene_.section("run");
-    HubTiming timing{run.at("heartbeat_s").as_double(), run.at("timeout_s").as_double(), run.at("startup_timeout_s").as_double(),
-                     run.at("stall_timeout_s").as_double()};
+    // Progress is seen only with each heartbeat: a stall shorter than two heartbeats could not be told apart.
+    const double heartbeat_s = run.at("heartbeat_s").as_double();
+    HubTiming timing{heartbeat_s, run.at("timeout_s").as_double(), run.at("startup_timeout_s").as_double(),
+                     std::max(run.at("stall_timeout_s").as_double(), 2 * heartbeat_s)};
     if (opt_.listen.empty()) launcher_ = std::make_unique<Launcher>();
     hub_ = std::make_unique<Hub>(opt_.listen.empty() ? "tcp://127.0.0.1:*" : opt_.listen, random_token(), timing,
                                  launcher_.get(), [this](const std::string& s) { log(s); });
@@ -403,7 +405,7 @@ void Runner::record_window(const WindowPlan& p, const WindowOutcome& o, double w
     auto add_stats = [&](const std::string& role, const Value& stats) {
         if (!stats.is_table()) return;
         for (const auto& [k, v] : stats.as_table())
-            if (v.is_number()) row.emplace_back(role + "." + k, v.as_double());
+            row.emplace_back(role + "." + k, v.as_double());  // Session checked: plain names, numbers
     };
     if (fluid_) add_stats("fluid", o.fluid.reply.stats);
     if (structure_) add_stats("structure", o.structure.reply.stats);

@@ -2,6 +2,9 @@
 
 #include <cmath>
 
+#include "sphfsi/coordinator/recorder.hpp"
+#include "sphfsi/protocol/codec.hpp"
+
 namespace sphfsi::coordinator {
 using namespace sphfsi::protocol;
 using Clock = std::chrono::steady_clock;
@@ -27,10 +30,15 @@ StepResult Session::finish_advance(const std::string& role, std::uint64_t seq) {
         throw ParticipantFailure(role, "garbage", "wants a step of " + seconds(r.reply.dt_wanted));
     if (!(r.reply.compute_s >= 0) || !std::isfinite(r.reply.compute_s))
         throw ParticipantFailure(role, "garbage", "reports a compute time of " + seconds(r.reply.compute_s));
+    // Each becomes the window column ROLE.NAME in the record.
     if (r.reply.stats.is_table())
-        for (const auto& [name, value] : r.reply.stats.as_table())
+        for (const auto& [name, value] : r.reply.stats.as_table()) {
+            if (!plain_name(name))
+                throw ParticipantFailure(role, "garbage", "reports stats '" + printable(name) +
+                                                              "', which is not a plain name (letters, digits, _ - . +; not starting with '.')");
             if (!value.is_number())
                 throw ParticipantFailure(role, "garbage", "reports stats '" + name + "' that is not a number (ADVANCED stats: str -> number)");
+        }
     return r;
 }
 

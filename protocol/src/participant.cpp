@@ -249,9 +249,11 @@ private:
         const auto period = std::chrono::duration<double>(heartbeat_s_);
         std::unique_lock lock(beat_mutex_);
         std::uint64_t seq = 0;
-        auto next_beat = Clock::now() + period;
+        auto next_beat = Clock::now() + std::chrono::duration_cast<Clock::duration>(period);
         while (!stopping_) {
-            beat_cv_.wait_for(lock, std::chrono::duration<double>(tick_s), [this] { return stopping_; });
+            // Wake for the next beat on time (never later than heartbeat_s after the last), and every tick_s.
+            const auto wake = std::min(Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(tick_s)), next_beat);
+            beat_cv_.wait_until(lock, wake, [this] { return stopping_; });
             if (stopping_) break;
             if (link_->computing()) {
                 link_->take_while_computing();
@@ -261,7 +263,8 @@ private:
                                 " s while we computed; exiting at once");
             }
             if (Clock::now() < next_beat) continue;
-            next_beat = Clock::now() + period;
+            next_beat += std::chrono::duration_cast<Clock::duration>(period);
+            if (next_beat < Clock::now()) next_beat = Clock::now();  // fell behind (a stalled machine): no burst
             Message m = make_message(MessageType::Heartbeat, ++seq, opt_.token, Heartbeat{progress_.steps.load()});
             m.version = version_;
             link_->send_heartbeat(m);

@@ -227,20 +227,23 @@ TEST_SUITE("adapter") {
                 CHECK_FALSE((x[0] > 0.2 && x[0] < 0.3 && x[1] > 0.02 && x[1] < 0.04));
             }
         const std::size_t nv = 27;
-        {  // An input of the wrong shape is a bad array size: bad_message (docs/protocol.md, ERROR codes).
-            sphfsi::protocol::AdvanceRequest bad;
-            bad.t = 0.0;
-            bad.dt = 1e-3;
-            bad.inputs["displacement"] = F64Array::zeros(nv - 1, 2);
-            bad.inputs["velocity"] = F64Array::zeros(nv - 1, 2);
-            Progress progress;
-            std::string code = "accepted";
-            try {
-                s.advance(bad, progress);
-            } catch (const sphfsi::protocol::SolverError& e) {
-                code = e.code();
-            }
-            CHECK(code == "bad_message");
+        {  // An input of the wrong shape or dtype is a bad array: bad_message (docs/protocol.md, ERROR codes).
+            auto code_of = [&](sphfsi::protocol::Field displacement) {
+                sphfsi::protocol::AdvanceRequest bad;
+                bad.t = 0.0;
+                bad.dt = 1e-3;
+                bad.inputs["displacement"] = std::move(displacement);
+                bad.inputs["velocity"] = F64Array::zeros(nv, 2);
+                Progress progress;
+                try {
+                    s.advance(bad, progress);
+                } catch (const sphfsi::protocol::SolverError& e) {
+                    return e.code();
+                }
+                return std::string("accepted");
+            };
+            CHECK(code_of(F64Array::zeros(nv - 1, 2)) == "bad_message");
+            CHECK(code_of(sphfsi::protocol::I32Array::zeros(nv, 2)) == "bad_message");
         }
         // At rest, after the fluid has settled around it: Archimedes, rho0 g A = 1000 * 9.81 * 0.1 * 0.02 N/m up.
         // Tolerance 10 %: the solid's SPH surface sits half a spacing outside the mesh (dp/2 = 2.5 mm on 20 mm

@@ -80,7 +80,7 @@ def test_wrong_kind_is_refused():
 
 def test_stalled_participant_with_live_heartbeats_is_named():
     # Before 2026-11-25 a participant stuck beside a live heartbeat thread was waited on for ever.
-    text = run_fault("stall", "error: structure has taken no sub-step for", 2.0 + 3.0,
+    text = run_fault("stall", "error: structure has taken no sub-step for", 2.0 + 5.0,
                      extra=("--set", "run.stall_timeout_s=2.0"))
     assert "progress stuck at 0; run.stall_timeout_s = 2.0 s" in text, text
 
@@ -102,6 +102,7 @@ def test_frames_that_cannot_be_recorded_are_named():
     run_fault("frame_changes", "error: structure changed its FRAME fields from [y] to [y, zz]", 5)
     run_fault("info_bad_key", "error: structure sent READY info key ''", 5)
     run_fault("stats_text", "error: structure reports stats 'x' that is not a number", 5)
+    run_fault("stats_bad_name", "error: structure reports stats 'a/b', which is not a plain name", 5)
 
 
 def start_long(name, *extra):

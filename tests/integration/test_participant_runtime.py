@@ -381,7 +381,8 @@ def test_a_long_advance_outlives_timeout_while_the_coordinator_beats_and_keeps_m
             r = s.c.request("ADVANCE", 3, advance(0.0, 1e-3, n, substeps=probe), timeout_s=30)
             assert r["type"] == "ADVANCED", r
             per_step = max(r["body"]["compute_s"], 1e-6) / probe
-            substeps = max(probe, min(p.long_substeps, int(3.0 / per_step)))  # about 3 s > timeout_s
+            # About 4 s, four times timeout_s: room for the probe to have run slower than this ADVANCE will.
+            substeps = max(probe, min(p.long_substeps, int(4.0 / per_step)))
             before = s.c.progress
             s.c.send("ADVANCE", 20, advance(1e-3, 1e-3, n, substeps=substeps))
             end = time.monotonic() + 10
@@ -400,6 +401,16 @@ def test_a_long_advance_outlives_timeout_while_the_coordinator_beats_and_keeps_m
             s.close()
 
 
+def cpu_seconds(pid):
+    """User + system CPU time of a process (0 once it is gone)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (FileNotFoundError, ProcessLookupError, IndexError):
+        return 0.0
+
+
 def test_participant_follows_a_killed_coordinator_out_of_a_long_advance():
     # The adversarial report: the structure, busy in an ADVANCE of 10^7 sub-steps, kept running at 99 % CPU
     # for > 45 s after its coordinator was SIGKILLed.
@@ -408,7 +419,11 @@ def test_participant_follows_a_killed_coordinator_out_of_a_long_advance():
                           "--set", "run.output_interval=1.0")
     pid = harness.participant_pid(run.wait_for("structure connected"))
     try:
-        time.sleep(1.5)  # INIT, then into the ADVANCE
+        # Into the ADVANCE: INIT and the first frame take milliseconds, so 0.5 s of CPU is the long window.
+        deadline = time.time() + 20
+        while cpu_seconds(pid) < 0.5 and time.time() < deadline:
+            time.sleep(0.05)
+        assert cpu_seconds(pid) >= 0.5, "the structure never got busy"
         run.proc.kill()
         run.proc.wait(timeout=10)
         deadline = time.time() + 5

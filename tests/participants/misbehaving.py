@@ -20,6 +20,7 @@ section picks the fault:
   mode = "frame_changes"  sends field y in its first FRAME, y and zz in the next
   mode = "info_bad_key"   sends READY info with a key ""
   mode = "stats_text"     reports ADVANCED stats with a string value
+  mode = "stats_bad_name" reports ADVANCED stats named "a/b" (it would become an HDF5 group)
   mode = "bad_exit"       answers BYE with ACK, then exits with status 5
   mode = "stall"          never answers the first ADVANCE while its heartbeats go on, progress standing still
 Otherwise it answers like a structure that does not move.
@@ -118,7 +119,7 @@ def main():
                      {"t": now + 1.0 if mode == "wrong_time" else now, "dt_wanted": 0.01,
                       "outputs": {"displacement": zero, "velocity": zero},
                       "substeps": 1, "solver_iterations": 0, "compute_s": 0.0,
-                      "stats": {"x": "text"} if mode == "stats_text" else {}})
+                      "stats": {"x": "text"} if mode == "stats_text" else {"a/b": 1.0} if mode == "stats_bad_name" else {}})
         elif kind == "SNAPSHOT":
             one = {"dtype": "f8", "shape": [1, 1], "data": struct.pack("<d", now)}
             fields = {"frame_time": {"time": one}, "frame_bad_name": {"": one},

@@ -102,7 +102,7 @@ private:
     };
     std::map<std::string, std::map<std::uint64_t, OpenRequest>> open_;  // role -> seq -> unanswered request
     std::vector<std::string> expected_;
-    std::uint64_t seq_ = 0;
+    std::uint64_t seq_ = 0, beat_seq_ = 0;  // requests, heartbeats
     std::chrono::steady_clock::time_point last_beat_sent_;
     double messaging_s_ = 0.0;
     bool closing_ = false;  // goodbye() has begun

@@ -22,6 +22,11 @@ struct RunMetadata {
     std::uint32_t protocol_version = 0;
 };
 
+// A name that can be an HDF5 dataset or attribute name as it is, and reads the same in h5py, ParaView and a
+// shell: letters, digits, '_', '-', '.', '+', not starting with '.'. Participants choose the names of their
+// FRAME fields, READY info and ADVANCED stats, so the rule is checked, never assumed.
+bool plain_name(const std::string& name);
+
 // What a participant sent cannot be recorded as it is (a field name HDF5 cannot hold, a field set or shape
 // that changed between frames, ...). Thrown before anything is written, so the record stays consistent; the
 // run turns it into a failure naming the participant.
