@@ -1,5 +1,6 @@
 #include "sphfsi/coordinator/recorder.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <fstream>
 #include <limits>
@@ -109,7 +110,15 @@ void Recorder::copy_history(const std::filesystem::path& old_file, double until)
         s.read(buf.data(), keep);
         series(path, s.row_shape(), s.is_int(), chunk_rows).append(buf.data(), keep);
     };
-    const hsize_t windows = rows_until("/windows/t");
+    // A kill during a flush can leave the datasets of one table a row apart (HDF5 updates them one after
+    // another): keep only the rows every one of them has, so the copy is one consistent table again.
+    auto rows_in_all = [&](const std::string& group, hsize_t keep, const std::vector<std::string>& skip) {
+        for (const auto& name : h5::children(src.get(), group))
+            if (std::find(skip.begin(), skip.end(), name) == skip.end()) keep = std::min(keep, h5::Series(src.get(), group + "/" + name).rows());
+        return keep;
+    };
+    hsize_t windows = rows_in_all("/windows", rows_until("/windows/t"), {});
+    if (h5::exists(src.get(), "/interface")) windows = rows_in_all("/interface", windows, {"vertices", "cells"});
     for (const auto& name : h5::children(src.get(), "/windows")) copy_rows("/windows/" + name, windows, 4096);
     for (const auto& name : h5::children(src.get(), "/interface")) {
         const std::string path = "/interface/" + name;
@@ -120,13 +129,14 @@ void Recorder::copy_history(const std::filesystem::path& old_file, double until)
     }
     for (const auto& role : h5::children(src.get(), "/frames")) {
         const std::string group = "/frames/" + role + "/";
-        const hsize_t frames = rows_until(group + "time");
+        const hsize_t frames = rows_in_all("/frames/" + role, rows_until(group + "time"), {});
         for (const auto& name : h5::children(src.get(), "/frames/" + role))
             copy_rows(group + name, frames, name == "time" ? 256 : 1);
         std::vector<double> times = read_all(group + "time");
         frame_times_[role].assign(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(frames));
         for (const auto& name : h5::children(src.get(), "/frames/" + role))
             if (name != "time") frame_fields_[role].insert(name);
+        if (series_.count(group + "position")) write_xdmf(role);  // the sidecar may list frames dropped here
     }
     flush();
 }

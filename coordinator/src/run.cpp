@@ -134,6 +134,9 @@ int Runner::execute() {
     }
     std::filesystem::create_directories(opt_.out_dir);  // only once the scene is known to be valid
     lock_ = std::make_unique<DirLock>(opt_.out_dir);
+    if (!resume)  // a fresh run: what an earlier run left here must not be resumed or read as this run's
+        for (const char* stale : {"checkpoint.bin", "record.xdmf", "watchpoints.csv", "record.h5.resuming"})
+            std::filesystem::remove(opt_.out_dir / stale);
     log_file_.open(opt_.out_dir / "run.log", resume ? std::ios::app : std::ios::trunc);
     const Value& run = scene_.section("run");
     fluid_ = scene_.has("fluid");
@@ -450,7 +453,9 @@ void Runner::checkpoint() {
         if (state.bytes.empty()) throw ParticipantFailure(role, "garbage", "sent a STATE with no bytes");
         c.states[role] = state.bytes;
     }
+    // Everything up to the checkpoint on disk before it exists: a resume keeps only what it finds there.
     recorder_->flush();
+    if (watchpoints_) watchpoints_->flush();
     write_checkpoint(opt_.out_dir / "checkpoint.bin", c);
     ++checkpoint_index_;
 }
