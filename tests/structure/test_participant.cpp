@@ -223,6 +223,13 @@ TEST_CASE("errors carry the protocol's codes") {
     s.init(request(coupled_scene()));
     Progress p;
     CHECK(code_of([&] { s.advance(window(0.5, 1e-3, 1), p); }) == "bad_state");  // wrong window start (docs/protocol.md)
+    {  // More sub-steps than a uint32 holds: the count used to wrap to a few huge steps, silently.
+        Value tiny = coupled_scene();
+        set(tiny, "time.dt_max", Value(2.3283064338e-12));  // 1e-2 s / this = 4.3e9 > 2^32 - 1
+        StructureSolver t;
+        t.init(request(tiny));
+        CHECK(code_of([&] { t.advance(window(0.0, 1e-2, 0), p); }) == "bad_config");
+    }
     Fields nan = forces(s, 1.0);
     std::get<F64Array>(nan["force"])(3, 0) = std::nan("");
     CHECK(code_of([&] { s.advance(window(0.0, 1e-3, 1, nan), p); }) == "diverged");
