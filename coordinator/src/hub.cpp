@@ -254,14 +254,19 @@ void Hub::check_liveness() {
             throw ParticipantFailure(role, "hung", "has been silent for " + fmt_s(silent) +
                                                        " (no reply, no heartbeat; run.timeout_s = " + fmt_s(timing_.timeout_s) + ")");
         // Heartbeats prove the process lives, not that it computes: during an ADVANCE its sub-step count
-        // must move. (Only ADVANCE: INIT, SNAPSHOT and CHECKPOINT take no sub-steps.)
+        // must move; any other request (INIT, SNAPSHOT, CHECKPOINT, SAVE, RESTORE: no sub-steps) must be
+        // answered within the same time.
         for (const auto& [seq, request] : open_[role]) {
-            if (request.type != MessageType::Advance) continue;
-            double stalled = seconds_since(std::max(request.sent, peer.progress_moved));
-            if (stalled > timing_.stall_timeout_s)
+            if (request.type == MessageType::Bye) continue;  // goodbye() bounds its own wait
+            const bool advance = request.type == MessageType::Advance;
+            double stalled = seconds_since(advance ? std::max(request.sent, peer.progress_moved) : request.sent);
+            if (stalled <= timing_.stall_timeout_s) continue;
+            const std::string limit = "; run.stall_timeout_s = " + fmt_s(timing_.stall_timeout_s) + ")";
+            if (advance)
                 throw ParticipantFailure(role, "hung", "has taken no sub-step for " + fmt_s(stalled) + " of an ADVANCE while its heartbeats go on " +
-                                                           "(progress stuck at " + std::to_string(peer.progress) +
-                                                           "; run.stall_timeout_s = " + fmt_s(timing_.stall_timeout_s) + ")");
+                                                           "(progress stuck at " + std::to_string(peer.progress) + limit);
+            throw ParticipantFailure(role, "hung", "has not answered " + std::string(to_string(request.type)) + " for " + fmt_s(stalled) +
+                                                       " while its heartbeats go on (" + limit.substr(2));
         }
     }
     if (seconds_since(last_beat_sent_) >= timing_.heartbeat_s) {

@@ -31,8 +31,9 @@ void run_section(schema::TableSchema& s) {
     run.number("startup_timeout_s", "Time a participant has to connect and say HELLO.")
         .unit("s").greater_than(0).at_most(3600).fallback(10.0);
     run.number("stall_timeout_s", "A participant whose heartbeats go on but whose sub-step count (HEARTBEAT progress) "
-                                  "stands still this long during an ADVANCE is declared hung (at least 2 heartbeat_s is used). One sub-step "
-                                  "of the built-in solvers takes well under a second; raise it for a foreign solver with slower steps.")
+                                  "stands still this long during an ADVANCE, or which leaves another request (INIT, SNAPSHOT, ...) "
+                                  "unanswered this long, is declared hung (at least 2 heartbeat_s is used). One sub-step of the "
+                                  "built-in solvers takes well under a second; raise it for a foreign solver with slower steps.")
         .unit("s").greater_than(0).at_most(1e5).fallback(30.0);
     run.check([](const Value& t, const std::string& path, schema::Errors& e) {
         if (t.at("heartbeat_s").as_double() * 2 > t.at("timeout_s").as_double())

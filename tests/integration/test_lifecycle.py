@@ -83,6 +83,10 @@ def test_stalled_participant_with_live_heartbeats_is_named():
     text = run_fault("stall", "error: structure has taken no sub-step for", 2.0 + 5.0,
                      extra=("--set", "run.stall_timeout_s=2.0"))
     assert "progress stuck at 0; run.stall_timeout_s = 2.0 s" in text, text
+    # Requests without sub-steps must be answered within the same time.
+    text = run_fault("hang_snapshot", "error: structure has not answered SNAPSHOT for", 2.0 + 5.0,
+                     extra=("--set", "run.stall_timeout_s=2.0"))
+    assert "while its heartbeats go on (run.stall_timeout_s = 2.0 s)" in text, text
 
 
 def test_unclean_exit_after_bye_is_logged():

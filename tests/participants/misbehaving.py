@@ -22,6 +22,7 @@ section picks the fault:
   mode = "stats_text"     reports ADVANCED stats with a string value
   mode = "stats_bad_name" reports ADVANCED stats named "a/b" (it would become an HDF5 group)
   mode = "bad_exit"       answers BYE with ACK, then exits with status 5
+  mode = "hang_snapshot"  never answers SNAPSHOT while its heartbeats go on
   mode = "stall"          never answers the first ADVANCE while its heartbeats go on, progress standing still
 Otherwise it answers like a structure that does not move.
 """
@@ -120,6 +121,8 @@ def main():
                       "outputs": {"displacement": zero, "velocity": zero},
                       "substeps": 1, "solver_iterations": 0, "compute_s": 0.0,
                       "stats": {"x": "text"} if mode == "stats_text" else {"a/b": 1.0} if mode == "stats_bad_name" else {}})
+        elif kind == "SNAPSHOT" and mode == "hang_snapshot":
+            time.sleep(3600)
         elif kind == "SNAPSHOT":
             one = {"dtype": "f8", "shape": [1, 1], "data": struct.pack("<d", now)}
             fields = {"frame_time": {"time": one}, "frame_bad_name": {"": one},
