@@ -212,6 +212,12 @@ void Recorder::append_frame(const std::string& role, double t, const protocol::F
             throw RecordRefused("sent a FRAME field named " + quoted(name) +
                                 ", which is not a plain name (letters, digits, _ - . +; not starting with '.'; not 'time')");
         names.insert(name);
+        const auto shape = std::visit([](const auto& a) { return a.shape; }, field);
+        std::string dims;
+        for (auto d : shape) dims += (dims.empty() ? "" : ", ") + std::to_string(d);
+        // A frame is one row of a chunked dataset whose chunk is that row: HDF5 cannot chunk an empty one.
+        if (std::find(shape.begin(), shape.end(), 0) != shape.end())
+            throw RecordRefused("sent the FRAME field '" + name + "' of shape [" + dims + "]: every dimension must be at least 1");
     }
     auto first = frame_fields_.find(role);
     if (first == frame_fields_.end()) {

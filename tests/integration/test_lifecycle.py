@@ -104,6 +104,7 @@ def test_frames_that_cannot_be_recorded_are_named():
     run_fault("frame_time", "error: structure sent a FRAME field named 'time'", 5)
     run_fault("frame_bad_name", "error: structure sent a FRAME field named ''", 5)
     run_fault("frame_changes", "error: structure changed its FRAME fields from [y] to [y, zz]", 5)
+    run_fault("frame_empty", "error: structure sent the FRAME field 'z' of shape [0, 4294967296]", 5)
     run_fault("info_bad_key", "error: structure sent READY info key ''", 5)
     run_fault("stats_text", "error: structure reports stats 'x' that is not a number", 5)
     run_fault("stats_bad_name", "error: structure reports stats 'a/b', which is not a plain name", 5)

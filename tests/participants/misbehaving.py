@@ -18,6 +18,7 @@ section picks the fault:
   mode = "frame_time"     sends a FRAME field named "time" (the recorder's own)
   mode = "frame_bad_name" sends a FRAME field named ""
   mode = "frame_changes"  sends field y in its first FRAME, y and zz in the next
+  mode = "frame_empty"    sends a FRAME field of shape [0, 4294967296]
   mode = "info_bad_key"   sends READY info with a key ""
   mode = "stats_text"     reports ADVANCED stats with a string value
   mode = "stats_bad_name" reports ADVANCED stats named "a/b" (it would become an HDF5 group)
@@ -126,7 +127,8 @@ def main():
         elif kind == "SNAPSHOT":
             one = {"dtype": "f8", "shape": [1, 1], "data": struct.pack("<d", now)}
             fields = {"frame_time": {"time": one}, "frame_bad_name": {"": one},
-                      "frame_changes": {"y": one, **({"zz": one} if now > 0 else {})}}.get(mode, {})
+                      "frame_changes": {"y": one, **({"zz": one} if now > 0 else {})},
+                      "frame_empty": {"z": {"dtype": "f8", "shape": [0, 4294967296], "data": b""}}}.get(mode, {})
             send("FRAME", seq, {"t": now, "fields": fields})
         elif kind == "CHECKPOINT":
             send("STATE", seq, {"t": now, "state": b"" if mode == "empty_state" else struct.pack("<d", now)})
