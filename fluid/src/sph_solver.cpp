@@ -1,5 +1,6 @@
 #include "sphfsi/fluid/sph_solver.hpp"
 
+#include <cstdio>
 #include <stdexcept>
 
 #include <omp.h>
@@ -20,6 +21,25 @@ bool inside_quad(const std::array<Vec2, 4>& q, const Vec2& p) {
         if ((b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]) < 0.0) return false;
     }
     return true;
+}
+
+// The structure's mesh, in its reference position, must lie in the tank, walls included (a plate's ends may
+// sit in the side walls). Elsewhere its solid particles would be outside every wall, and the neighbour grid,
+// which spans all particles, would grow with the distance: a mesh 1e6 m away took gigabytes before a step.
+void check_inside_tank(const protocol::InterfaceMesh& mesh, const FluidSettings& s) {
+    const double wall = s.wall_layers * s.dp;
+    const double x_lo = -wall, x_hi = s.tank_width + wall, y_lo = -wall, y_hi = s.tank_height + wall;
+    for (std::uint64_t v = 0; v < mesh.vertices.rows(); ++v) {
+        const double x = mesh.vertices(v, 0), y = mesh.vertices(v, 1);
+        if (x < x_lo || x > x_hi || y < y_lo || y > y_hi) {
+            char buf[320];
+            std::snprintf(buf, sizeof buf,
+                          "the structure's interface mesh has vertex %llu at (%.6g, %.6g) m, outside the tank and its walls "
+                          "(x in [%.6g, %.6g], y in [%.6g, %.6g] m): fluid.tank and the structure's geometry disagree",
+                          static_cast<unsigned long long>(v), x, y, x_lo, x_hi, y_lo, y_hi);
+            throw SolverError("bad_config", buf);
+        }
+    }
 }
 
 const F64Array* find_f64(const protocol::Fields& fields, const char* name) {
@@ -60,6 +80,7 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
     sim_ = std::make_unique<Simulation2D>(settings_, build_scene(settings_), request.t0);
     coupling_.reset();
     if (request.interface) {
+        check_inside_tank(*request.interface, settings_);
         try {
             coupling_.emplace(*request.interface, settings_.dp);
         } catch (const std::invalid_argument& e) {

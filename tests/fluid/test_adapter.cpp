@@ -227,6 +227,20 @@ TEST_SUITE("adapter") {
                 CHECK_FALSE((x[0] > 0.2 && x[0] < 0.3 && x[1] > 0.02 && x[1] < 0.04));
             }
         const std::size_t nv = 27;
+        {  // A mesh outside the tank and its walls is refused (it made the neighbour grid huge): bad_config.
+            InterfaceMesh far = plate();
+            for (std::size_t v = 0; v < far.vertices.rows(); ++v) far.vertices(v, 0) -= 1e6;
+            SphSolver t;
+            sphfsi::protocol::InitRequest r = req;
+            r.interface = far;
+            std::string code = "accepted";
+            try {
+                t.init(r);
+            } catch (const sphfsi::protocol::SolverError& e) {
+                code = e.code();
+            }
+            CHECK(code == "bad_config");
+        }
         {  // An input of the wrong shape or dtype is a bad array: bad_message (docs/protocol.md, ERROR codes).
             auto code_of = [&](sphfsi::protocol::Field displacement) {
                 sphfsi::protocol::AdvanceRequest bad;
