@@ -57,6 +57,7 @@ int main_cli(int argc, char** argv) {
         } else if (a == "--resume") {
             auto v = value();
             if (!v) return usage_error("--resume needs the output directory of the run");
+            if (opt.resume) return usage_error("--resume is given twice");
             opt.resume = true;
             opt.out_dir = *v;
         } else if (a == "--quiet") {

@@ -212,8 +212,11 @@ void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) 
         if (!e.answerable()) return log_("ignored a malformed " + e.type_name() + " from an unknown connection");
         return refuse(e.seq(), e.code(), std::string("malformed first message: ") + e.what());
     }
-    if (!is_answered(m.type))
-        return log_("ignored " + std::string(to_string(m.type)) + " from an unknown connection");
+    if (!is_answered(m.type)) {  // once per connection: a stray peer's heartbeats would fill the log
+        if (quiet_strangers_.insert(id).second)
+            log_("ignored " + std::string(to_string(m.type)) + " from an unknown connection (further ones not logged)");
+        return;
+    }
     if (m.type != MessageType::Hello) return refuse(m.seq, "refused", "first message must be HELLO, got " + std::string(to_string(m.type)));
     if (m.token != token_) return refuse(m.seq, "bad_token", "HELLO carries a token that is not this run's (stale or stray participant)");
     const auto& h = m.as<Hello>();

@@ -52,7 +52,15 @@ std::string escaped(std::string_view s, bool controls, std::size_t max_bytes) {
         }
         const std::size_t n = utf8_sequence(s, i);
         const auto c = static_cast<unsigned char>(s[i]);
-        if (n == 0 || (controls && (c < 0x20 || c == 0x7F))) {
+        auto byte = [&](std::size_t k) { return static_cast<unsigned char>(s[i + k]); };
+        // Bidirectional embeddings and isolates (U+202A-202E, U+2066-2069) reorder how the rest of a log line
+        // is displayed: a quoted name could make the line read as something else.
+        const bool bidi = controls && n == 3 && c == 0xE2 &&
+                          ((byte(1) == 0x80 && byte(2) >= 0xAA && byte(2) <= 0xAE) || (byte(1) == 0x81 && byte(2) >= 0xA6 && byte(2) <= 0xA9));
+        if (bidi) {
+            for (std::size_t k = 0; k < 3; ++k) (out += "\\x") += {hex[byte(k) >> 4], hex[byte(k) & 0xF]};
+            i += 3;
+        } else if (n == 0 || (controls && (c < 0x20 || c == 0x7F))) {
             out += "\\x";
             out += hex[c >> 4];
             out += hex[c & 0xF];

@@ -75,6 +75,10 @@ TEST_CASE("printable escapes bytes outside UTF-8 and control characters, keeps t
     CHECK(printable("\xed\xa0\x80") == "\\xed\\xa0\\x80");          // a surrogate
     CHECK(printable("\xf4\x90\x80\x80") == "\\xf4\\x90\\x80\\x80");  // above U+10FFFF
     CHECK(printable("ab\xe2\x82") == "ab\\xe2\\x82");               // truncated sequence
+    // Bidirectional overrides and isolates would reorder the rest of a log line as it is displayed.
+    CHECK(printable("a\xe2\x80\xae" "b") == "a\\xe2\\x80\\xae" "b");      // U+202E RIGHT-TO-LEFT OVERRIDE
+    CHECK(printable("a\xe2\x81\xa6" "b") == "a\\xe2\\x81\\xa6" "b");      // U+2066 LEFT-TO-RIGHT ISOLATE
+    CHECK(printable("\xe2\x80\x94") == "\xe2\x80\x94");              // an em dash stays
     // Long input is cut, never inside a character.
     CHECK(printable(std::string(200, 'a')) == std::string(80, 'a') + "...");
     CHECK(printable("\xc3\xa9\xc3\xa9\xc3\xa9", 3) == "\xc3\xa9\xc3\xa9...");

@@ -7,6 +7,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -106,6 +107,7 @@ private:
     std::chrono::steady_clock::time_point last_beat_sent_;
     double messaging_s_ = 0.0;
     bool closing_ = false;  // goodbye() has begun
+    std::set<std::string> quiet_strangers_;  // unknown connections whose unanswered messages were logged once
 };
 
 }  // namespace sphfsi::coordinator
