@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 namespace sphfsi::protocol {
 
@@ -10,6 +11,15 @@ std::string seconds(double t) {
     char buf[48];
     std::snprintf(buf, sizeof buf, "%.17g s", t);  // every digit: a refusal may be 1e-9 away
     return buf;
+}
+
+std::optional<std::uint32_t> substep_count(double count) {
+    if (!(count <= std::numeric_limits<std::uint32_t>::max())) return std::nullopt;
+    return static_cast<std::uint32_t>(count);
+}
+
+std::optional<std::uint32_t> substeps_to_cover(double window, double step) {
+    return substep_count(std::max(1.0, std::ceil(window / step * (1.0 - 1e-12))));
 }
 
 bool same_instant(double t, double expected, double dt) {

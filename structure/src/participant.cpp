@@ -1,7 +1,6 @@
 #include "sphfsi/structure/participant.hpp"
 
 #include <cmath>
-#include <limits>
 #include <numbers>
 
 #include "sphfsi/structure/checkpoint.hpp"
@@ -75,11 +74,11 @@ AdvanceReply StructureSolver::advance(const AdvanceRequest& request, Progress& p
 
     std::uint32_t n = request.substeps;
     if (n == 0) {
-        const double count = std::max(1.0, std::ceil(request.dt / dt_wanted_ * (1.0 - 1e-12)));
-        if (!(count <= std::numeric_limits<std::uint32_t>::max()))  // a cast would wrap: silently far larger steps
+        const auto count = substeps_to_cover(request.dt, dt_wanted_);
+        if (!count)
             throw SolverError("bad_config", "structure: a window of " + seconds(request.dt) + " needs more sub-steps of " +
                                                 seconds(dt_wanted_) + " than a count can hold (time.dt_max is too small)");
-        n = static_cast<std::uint32_t>(count);
+        n = *count;
     }
     const double h = request.dt / n;
 

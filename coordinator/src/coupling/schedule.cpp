@@ -1,5 +1,4 @@
 #include <cmath>
-#include <limits>
 
 #include "sphfsi/coordinator/coupling.hpp"
 
@@ -37,16 +36,15 @@ WindowPlan Schedule::next(double t, double fluid_dt, double structure_dt, double
         p.clipped = t + p.dt > t_stop;
         p.dt = t_stop - t;
     }
-    double count = 1;  // why one: docs/coupling.md, "A light structure: one structure step per window"
+    std::optional<std::uint32_t> count = 1;  // why one: docs/coupling.md, "A light structure: one structure step per window"
     if (!one_structure_step_)
-        count = p.rule == WindowRule::Thesis ? std::floor(p.dt / structure_dt) + 1
-                                             : std::max(1.0, std::ceil(p.dt / structure_dt * (1 - 1e-12)));
-    // ADVANCE substeps is a uint32: a cast of more would wrap to a count of far larger steps, silently.
-    if (!(count <= std::numeric_limits<std::uint32_t>::max()))
+        count = p.rule == WindowRule::Thesis ? protocol::substep_count(std::floor(p.dt / structure_dt) + 1)
+                                             : protocol::substeps_to_cover(p.dt, structure_dt);
+    if (!count)
         throw ParticipantFailure("structure", "garbage", "wants a step of " + protocol::seconds(structure_dt) +
                                                              ", too small to cover a window of " + protocol::seconds(p.dt) +
                                                              " in the sub-steps an ADVANCE can ask for");
-    p.structure_substeps = static_cast<std::uint32_t>(count);
+    p.structure_substeps = *count;
     return p;
 }
 

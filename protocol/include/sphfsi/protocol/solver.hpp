@@ -74,6 +74,12 @@ void check_window(const AdvanceRequest& request, double now, const std::string& 
 bool same_instant(double t, double expected, double dt);
 // A time with every digit and its unit ("0.10000000000000001 s"), for messages about these checks.
 std::string seconds(double t);
+// A sub-step count as ADVANCE carries it (a uint32), or nullopt when `count` is more than that holds (or not a
+// number): a cast would wrap to a count of far larger steps, silently.
+std::optional<std::uint32_t> substep_count(double count);
+// The fewest equal sub-steps of at most `step` that cover `window` (at least 1; a step a hair short of
+// window / n still gives n), as substep_count.
+std::optional<std::uint32_t> substeps_to_cover(double window, double step);
 
 // Progress counter the heartbeat thread reports; a solver bumps it once per sub-step.
 struct Progress {
