@@ -57,18 +57,14 @@ std::string escaped(std::string_view s, bool controls, std::size_t max_bytes) {
         // is displayed: a quoted name could make the line read as something else.
         const bool bidi = controls && n == 3 && c == 0xE2 &&
                           ((byte(1) == 0x80 && byte(2) >= 0xAA && byte(2) <= 0xAE) || (byte(1) == 0x81 && byte(2) >= 0xA6 && byte(2) <= 0xA9));
-        if (bidi) {
-            for (std::size_t k = 0; k < 3; ++k) (out += "\\x") += {hex[byte(k) >> 4], hex[byte(k) & 0xF]};
-            i += 3;
-        } else if (n == 0 || (controls && (c < 0x20 || c == 0x7F))) {
-            out += "\\x";
-            out += hex[c >> 4];
-            out += hex[c & 0xF];
-            ++i;
-        } else {
+        const std::size_t escape = bidi ? 3 : (n == 0 || (controls && (c < 0x20 || c == 0x7F))) ? 1 : 0;
+        if (escape == 0) {
             out.append(s, i, n);
             i += n;
+            continue;
         }
+        for (std::size_t k = 0; k < escape; ++k) (out += "\\x") += {hex[byte(k) >> 4], hex[byte(k) & 0xF]};
+        i += escape;
     }
     return out;
 }
