@@ -30,7 +30,7 @@ void check_info_keys(const std::string& prefix, const Value& v) {
     for (const auto& [k, x] : v.as_table()) {
         if (!plain_name(k))
             throw RecordRefused("sent READY info key " + quoted(prefix + k) +
-                                ", which is not a plain name (letters, digits, _ - . +; not starting with '.')");
+                                ", which is not a plain name (" + kPlainNameRule + ")");
         check_info_keys(prefix + k + ".", x);
     }
 }
@@ -148,10 +148,14 @@ Recorder::~Recorder() {
     }
 }
 
+h5::Series* Recorder::existing_series(const std::string& path) {
+    if (auto it = series_.find(path); it != series_.end()) return &it->second;
+    if (h5::exists(h5_.get(), path)) return &series_.emplace(path, h5::Series(h5_.get(), path)).first->second;
+    return nullptr;
+}
+
 h5::Series& Recorder::series(const std::string& path, const std::vector<hsize_t>& row_shape, bool is_int, hsize_t chunk_rows) {
-    auto it = series_.find(path);
-    if (it != series_.end()) return it->second;
-    if (h5::exists(h5_.get(), path)) return series_.emplace(path, h5::Series(h5_.get(), path)).first->second;
+    if (h5::Series* s = existing_series(path)) return *s;
     // Compressed: integer frame fields only (one frame per chunk, written once). Deflate shrinks float fields
     // 1.3-1.6 times at ~9 ms per 17k-particle frame while both participants wait (docs/record.md).
     const bool compress = chunk_rows == 1 && is_int;
@@ -206,18 +210,20 @@ void Recorder::append_window(const std::vector<std::pair<std::string, double>>& 
 void Recorder::append_frame(const std::string& role, double t, const protocol::Fields& fields) {
     const std::string group = "/frames/" + role + "/";
     // Every check before the first write: each field's rows must stay aligned with /frames/ROLE/time.
+    auto is_int_field = [](const protocol::Field& f) { return std::holds_alternative<protocol::I32Array>(f); };
+    auto shape_of = [](const protocol::Field& f) { return std::visit([](const auto& a) { return row_shape_of(a.shape); }, f); };
     std::set<std::string> names;
     for (const auto& [name, field] : fields) {
         if (!plain_name(name) || name == "time")
             throw RecordRefused("sent a FRAME field named " + quoted(name) +
-                                ", which is not a plain name (letters, digits, _ - . +; not starting with '.'; not 'time')");
+                                ", which is not a plain name (" + kPlainNameRule + "; not 'time')");
         names.insert(name);
-        const auto shape = std::visit([](const auto& a) { return a.shape; }, field);
-        std::string dims;
-        for (auto d : shape) dims += (dims.empty() ? "" : ", ") + std::to_string(d);
         // A frame is one row of a chunked dataset whose chunk is that row: HDF5 cannot chunk an empty one.
-        if (std::find(shape.begin(), shape.end(), 0) != shape.end())
+        if (const auto shape = shape_of(field); std::find(shape.begin(), shape.end(), 0) != shape.end()) {
+            std::string dims;
+            for (auto d : shape) dims += (dims.empty() ? "" : ", ") + std::to_string(d);
             throw RecordRefused("sent the FRAME field '" + name + "' of shape [" + dims + "]: every dimension must be at least 1");
+        }
     }
     auto first = frame_fields_.find(role);
     if (first == frame_fields_.end()) {
@@ -228,16 +234,12 @@ void Recorder::append_frame(const std::string& role, double t, const protocol::F
         for (const auto& n : names) now += (now.empty() ? "" : ", ") + n;
         throw RecordRefused("changed its FRAME fields from [" + was + "] to [" + now + "]; every frame must send the same fields");
     }
-    auto is_int_field = [](const protocol::Field& f) { return std::holds_alternative<protocol::I32Array>(f); };
-    auto shape_of = [](const protocol::Field& f) { return std::visit([](const auto& a) { return row_shape_of(a.shape); }, f); };
-    for (const auto& [name, field] : fields) {
-        auto known = series_.find(group + name);
-        if (known == series_.end() && h5::exists(h5_.get(), group + name)) known = series_.emplace(group + name, h5::Series(h5_.get(), group + name)).first;
-        if (known != series_.end() && (known->second.row_shape() != shape_of(field) || known->second.is_int() != is_int_field(field)))
-            throw RecordRefused("changed the shape or type of FRAME field '" + name + "' between frames");
-    }
     for (const auto& [name, field] : fields)
-        std::visit([&](const auto& a) { series(group + name, row_shape_of(a.shape), is_int_field(field), 1).append(a.values.data(), 1); }, field);
+        if (const h5::Series* known = existing_series(group + name);
+            known && (known->row_shape() != shape_of(field) || known->is_int() != is_int_field(field)))
+            throw RecordRefused("changed the shape or type of FRAME field '" + name + "' between frames");
+    for (const auto& [name, field] : fields)
+        std::visit([&](const auto& a) { series(group + name, shape_of(field), is_int_field(field), 1).append(a.values.data(), 1); }, field);
     series(group + "time", {}, false, 256).append(&t, 1);
     frame_times_[role].push_back(t);
     flush();

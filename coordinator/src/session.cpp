@@ -35,7 +35,7 @@ StepResult Session::finish_advance(const std::string& role, std::uint64_t seq) {
         for (const auto& [name, value] : r.reply.stats.as_table()) {
             if (!plain_name(name))
                 throw ParticipantFailure(role, "garbage", "reports stats '" + printable(name) +
-                                                              "', which is not a plain name (letters, digits, _ - . +; not starting with '.')");
+                                                              "', which is not a plain name (" + kPlainNameRule + ")");
             if (!value.is_number())
                 throw ParticipantFailure(role, "garbage", "reports stats '" + name + "' that is not a number (ADVANCED stats: str -> number)");
         }

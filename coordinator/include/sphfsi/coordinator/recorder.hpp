@@ -26,6 +26,8 @@ struct RunMetadata {
 // shell: letters, digits, '_', '-', '.', '+', not starting with '.'. Participants choose the names of their
 // FRAME fields, READY info and ADVANCED stats, so the rule is checked, never assumed.
 bool plain_name(const std::string& name);
+// The rule, as the refusals state it.
+inline constexpr const char* kPlainNameRule = "letters, digits, _ - . +; not starting with '.'";
 
 // What a participant sent cannot be recorded as it is (a field name HDF5 cannot hold, a field set or shape
 // that changed between frames, ...). Thrown before anything is written, so the record stays consistent; the
@@ -63,6 +65,7 @@ public:
 private:
     void write_xdmf(const std::string& role);
     void copy_history(const std::filesystem::path& old_file, double until);
+    h5::Series* existing_series(const std::string& path);  // opened or in the file already; nullptr if neither
     h5::Series& series(const std::string& path, const std::vector<hsize_t>& row_shape, bool is_int, hsize_t chunk_rows);
 
     std::filesystem::path file_;
