@@ -122,8 +122,9 @@ private:
     static constexpr double pcisph_reach = 0.25, pcisph_step_reach = 0.2;
     void accumulate_solid_forces(double weight);
     void wrap_periodic();
-    double check_state();
-    void mark_escaped();  // throws on a broken fluid particle; returns the largest fluid density
+    double check_state();  // throws on a broken fluid particle; returns the largest fluid density
+    void mark_escaped();
+    bool over_the_wall(const V& x) const;  // beyond a side wall of an open tank, having gone over it
     [[noreturn]] void fail(std::size_t i, const std::string& quantity, double value, const std::string& why) const;
     V boundary_acceleration(std::uint32_t w) const;
 
