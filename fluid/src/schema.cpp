@@ -216,7 +216,9 @@ TableSchema build() {
                                 "fluid, in 2D) is below this")
         .greater_than(0).less_than(2).fallback(1.5);
     surface.vector("wind_shear", 2, "shear stress applied to the free surface (wind): each free-surface particle "
-                                    "carries it on dp of surface, a body force tau dp / m").unit("Pa")
+                                    "carries it on its share of the surface (dp on the initial lattice; measured "
+                                    "along the surface as the layer rearranges), so the total force is tau times "
+                                    "the surface length").unit("Pa")
         .fallback(Value(Value::Array{Value(0.0), Value(0.0)}));
 
     TableSchema& time = s.table("time", "time stepping");

@@ -125,10 +125,7 @@ Simulation2D::Simulation2D(const FluidSettings& settings, Scene2D scene, double 
     rates_.repulsive_r0 = s_.dp;
     rates_.repulsive_d = s_.repulsive_d > 0.0 ? s_.repulsive_d : 5.0 * s_.gravity_magnitude() * s_.water_top();
     rates_.gravity = V{{s_.gravity[0], s_.gravity[1]}};
-    rates_.wind = V{{s_.wind_shear[0], s_.wind_shear[1]}};
-    rates_.wind_on = s_.wind_shear[0] != 0.0 || s_.wind_shear[1] != 0.0;
-    rates_.surface_threshold = s_.surface_threshold;
-    rates_.surface_share = s_.dp;  // 2D: length per surface particle
+    surface_ = make_surface_stress<Dim>(V{{s_.wind_shear[0], s_.wind_shear[1]}}, s_.surface_threshold, h_, s_.dp);
 
     pcisph_.mass = mass_;
     pcisph_.rho0 = s_.rho0;
@@ -293,6 +290,7 @@ void Simulation2D::evaluate() {
         }
         compute_rates(P, grid_, kw, kg, ViscosityKernel<Dim>(h_), fill_rate_factors(), rates_,
                       kinematic_floor_ ? &floor : nullptr);
+        if (surface_.on()) apply_surface_stress(P, grid_, kg, mass_, surface_);
         if (kinematic_floor_) {
 #pragma omp parallel for schedule(static)
             for (long long q = 0; q < nn; ++q) {
@@ -403,6 +401,7 @@ void Simulation2D::refresh_solid_rates() {
         // The factors of all particles: the buffer is scratch (the sort reuses it), not state.
         compute_rates(P, grid_, kw, kg, ViscosityKernel<Dim>(h_), fill_rate_factors(), rates_, nullptr,
                       near_solid_.data());
+        if (surface_.on()) apply_surface_stress(P, grid_, kg, mass_, surface_, near_solid_.data());
     });
     reduce_rates();
 }

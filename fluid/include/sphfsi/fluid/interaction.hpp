@@ -1,6 +1,6 @@
 #pragma once
 // The fused rate pass: one sweep over every particle's neighbours computes, for fluid particles, the
-// acceleration (pressure, viscosity, wall repulsion, gravity, wind), the density rate (continuity +
+// acceleration (pressure, viscosity, wall repulsion, gravity), the density rate (continuity +
 // delta-SPH) and the divergence of position (free-surface indicator); for wall particles of the dummy
 // model their density rate; for solid particles the fluid force on them. Gather form: each particle sums
 // over its own neighbours, so threads never write to the same particle (no atomics, no per-thread
@@ -32,10 +32,6 @@ struct RateParams {
     bool repulsive = false;          // Monaghan (1994) wall force
     double repulsive_d = 0.0, repulsive_r0 = 0.0;
     Vec<Dim> gravity{};
-    Vec<Dim> wind{};                 // surface shear stress [Pa]
-    bool wind_on = false;
-    double surface_threshold = 1.5;  // divergence of position below which a particle is on the free surface
-    double surface_share = 0.0;      // surface length (area) one surface particle carries: dp^(Dim-1)
 };
 
 // Per-particle factors of the pair terms, computed once per evaluation instead of once per pair: p/rho^2
@@ -155,13 +151,7 @@ void compute_rates(ParticleStore<Dim>& P, const CellGrid<Dim>& grid, const Kerne
                 }
             }
             V a = acc * m + acc_direct;
-            if (is_fluid) {
-                a += prm.gravity;
-                // Wind: each free-surface particle (divergence of position below the threshold: the outermost
-                // layer, whose kernel support is half empty) carries the stress on its share of the surface,
-                // dp^(Dim-1), so the total force is tau times the surface length.
-                if (prm.wind_on && m * div_r < prm.surface_threshold) a += prm.wind * (prm.surface_share / m);
-            }
+            if (is_fluid) a += prm.gravity;  // the surface stress (wind) is added after this pass: surface_stress.hpp
             P.a[i] = a;  // solids: force per unit mass of the particle (the reaction), times m gives newtons
             P.drho[i] = prm.continuity ? m * (drho + drho_diff) : 0.0;
             P.div_r[i] = static_cast<float>(m * div_r);

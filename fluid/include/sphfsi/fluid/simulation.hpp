@@ -17,6 +17,7 @@
 #include "sphfsi/fluid/scene_setup.hpp"
 #include "sphfsi/fluid/settings.hpp"
 #include "sphfsi/fluid/state_io.hpp"
+#include "sphfsi/fluid/surface_stress.hpp"
 #include "sphfsi/fluid/time_step.hpp"
 
 namespace sphfsi::fluid {
@@ -136,6 +137,7 @@ private:
     TaitEos tait_;
     StandardEos standard_;
     RateParams<Dim> rates_;
+    SurfaceStress<Dim> surface_;  // wind
     bool continuity_ = false;  // densities integrated (else summed)
     // Integrated densities are kept at or above min(rho(p = 0), kinematic density); see the constructor.
     bool kinematic_floor_ = false;

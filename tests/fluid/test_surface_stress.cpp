@@ -1,0 +1,98 @@
+// The surface stress (wind) adds up to tau times the surface length however the surface particles are
+// arranged (surface_stress.hpp). Set-up: a water layer periodic in x, L = 40 dp long, whose top particles are
+// marked as the free surface (div r below the threshold) by hand, so only the share computation is tested.
+// Reference: the exact total tau L (a momentum balance). Tolerance: 1e-12 relative on the initial lattice,
+// where the share is dp by construction; 1 % for the rearranged surfaces, where the share is a kernel
+// quadrature of the surface's particle density (measured: 0.6 % at most). With the old rule, dp per surface
+// particle, the compressed surface below carried 1.5 times the force and the doubled layer 2 times.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "sphfsi/fluid/cell_grid.hpp"
+#include "sphfsi/fluid/kernels.hpp"
+#include "sphfsi/fluid/particles.hpp"
+#include "sphfsi/fluid/surface_stress.hpp"
+
+using namespace sphfsi::fluid;
+
+namespace {
+
+constexpr double dp = 0.01, h = 1.5 * dp, rho0 = 1000.0, mass = rho0 * dp * dp, L = 40 * dp;
+const Vec2 tau{{2.0, 0.0}};
+
+struct Layer {
+    std::vector<Vec2> x;
+    std::vector<bool> surface;
+    void row(double y, double spacing, double offset, bool on_surface) {
+        const int n = static_cast<int>(std::lround(L / spacing));
+        for (int k = 0; k < n; ++k) {
+            x.push_back(Vec2{{offset + (k + 0.5) * spacing, y}});
+            surface.push_back(on_surface);
+        }
+    }
+};
+
+// A lattice body of 8 rows under `top`'s rows; returns the total stress force on the layer, per unit tau.
+double total_force(const Layer& top) {
+    Layer all;
+    for (int r = 0; r < 8; ++r) all.row((r + 0.5) * dp, dp, 0.0, false);
+    all.x.insert(all.x.end(), top.x.begin(), top.x.end());
+    all.surface.insert(all.surface.end(), top.surface.begin(), top.surface.end());
+    ParticleStore<2> P;
+    P.resize(all.x.size());
+    for (std::size_t i = 0; i < P.size(); ++i) {
+        P.x[i] = all.x[i];
+        P.x[i][0] = std::fmod(P.x[i][0], L);
+        P.rho[i] = rho0;
+        P.kind[i] = Kind::Fluid;
+        P.div_r[i] = all.surface[i] ? 1.0f : 2.0f;
+    }
+    CellGrid<2> grid;
+    grid.configure(Vec2{{0.0, -dp}}, Vec2{{L, 12 * dp}}, 2.0 * h, {true, false});
+    std::vector<std::uint32_t> order;
+    grid.build(P.x, order);
+    std::vector<unsigned char> scratch;
+    P.reorder(order, scratch);
+    apply_surface_stress(P, grid, WendlandC2Kernel<2>(h), mass, make_surface_stress<2>(tau, 1.5, h, dp));
+    double fx = 0.0, fy = 0.0;
+    for (std::size_t i = 0; i < P.size(); ++i) {
+        fx += P.a[i][0] * mass;
+        fy += P.a[i][1] * mass;
+    }
+    CHECK(std::abs(fy) < 1e-12);
+    return fx / (tau[0] * L);
+}
+
+}  // namespace
+
+TEST_SUITE("wind") {
+    TEST_CASE("the surface stress adds up to tau times the surface length however the surface is arranged") {
+        Layer lattice;
+        lattice.row(8.5 * dp, dp, 0.0, true);
+        const double on_lattice = total_force(lattice);
+
+        Layer compressed;  // 1.5 surface particles per dp, as a sheared surface layer packs them
+        compressed.row(8.5 * dp, dp / 1.5, 0.0, true);
+        const double packed = total_force(compressed);
+
+        Layer doubled;  // the top two rows both flagged, one above the other
+        doubled.row(8.5 * dp, dp, 0.0, true);
+        doubled.row(9.5 * dp, dp, 0.0, true);
+        const double two_rows = total_force(doubled);
+
+        Layer staggered;  // the second row half a spacing along, 0.4 dp higher
+        staggered.row(8.5 * dp, dp, 0.0, true);
+        staggered.row(8.9 * dp, dp, 0.5 * dp, true);
+        const double offset_rows = total_force(staggered);
+
+        std::printf("surface stress, total / (tau L): lattice %.6f, 1.5 per dp %.6f, two rows %.6f, staggered %.6f\n",
+                    on_lattice, packed, two_rows, offset_rows);
+        CHECK(std::abs(on_lattice - 1.0) < 1e-12);
+        CHECK(std::abs(packed - 1.0) < 0.01);
+        CHECK(std::abs(two_rows - 1.0) < 0.01);
+        CHECK(std::abs(offset_rows - 1.0) < 0.01);
+    }
+}
