@@ -100,6 +100,14 @@ def series_label(row, keys):
     return ", ".join(f"{short[k]}={row.get(k, '')}" for k in keys)
 
 
+def short_number(text):
+    """An annotation: a number to 4 significant digits (0.0013333333333333333 as 0.001333), other text as is."""
+    try:
+        return f"{float(text):.4g}"
+    except ValueError:
+        return text
+
+
 def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None):
     """Draws the chart of `rows` (dicts of CSV text) to PREFIX.png and PREFIX.svg; returns a summary."""
     desc = desc or {}
@@ -139,8 +147,8 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
                 label=text, ms=6, lw=1.4, zorder=3)
         if annotate:
             for px, py, r in pts:
-                ax.annotate(r.get(annotate, ""), (px, py), textcoords="offset points", xytext=(5, 4), fontsize=7,
-                            color=colours[label])
+                ax.annotate(short_number(r.get(annotate, "")), (px, py), textcoords="offset points", xytext=(5, 4),
+                            fontsize=7, color=colours[label])
         all_pts += [(p[0], p[1], label, p[2]) for p in pts]
 
     front = []
