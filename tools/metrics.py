@@ -522,6 +522,71 @@ def surge_front(run_dir, params, context):
             "mean_signed_rel": float(np.mean(rel)), "n_points": int(Tref.size)}
 
 
+@metric("wind_basin_profile",
+        dict(tau=REQUIRED, depth=REQUIRED, nu=REQUIRED, x_from=REQUIRED, x_to=REQUIRED, t_from=REQUIRED,
+             t_to=None, rho0=1000.0, g=9.81, dp=None),
+        {"l2_rel": ("relative L2 error of the time-averaged u(z) over layers of dp", "-"),
+         "velocity_scale": ("least-squares k in u = k u_exact: below 1 when the flow is too slow", "-"),
+         "setup_ratio": ("d(p + rho g y)/dx over the section, over 3 tau / (2 depth)", "-"),
+         "frames": ("frames averaged", "-")},
+        ("l2_rel",))
+def wind_basin_profile(run_dir, params, context):
+    """Steady wind-driven flow in a closed basin: the mid-basin velocity profile and set-up.
+
+    Reference (lubrication theory of a closed basin of depth D under a surface stress tau, no-slip bottom,
+    zero net flux): u(z) = tau D / (4 mu) (3 s^2 - 2 s), s = z / D, mu = rho0 nu, driven by the set-up's
+    pressure gradient dp/dx = 3 tau / (2 D) (e.g. the shallow-lake paper; any text on wind set-up).
+    Measured over the fluid particles with x_from < x < x_to (away from the end walls by a few depths, where
+    the flow is parallel) in the frames with t_from <= t <= t_to: u(z) is averaged in layers of dp over
+    those particles and frames and compared at each layer's mean z,
+        l2_rel = sqrt(sum (u - u_exact)^2 / sum u_exact^2),  velocity_scale = sum u u_exact / sum u_exact^2;
+    setup_ratio: the slope of a straight-line fit of p + rho g y against x over the section's particles
+    below depth - 2 dp (the surface layer's pressure is clamped at zero), over 3 tau / (2 D).
+    """
+    tau, D, nu = float(params["tau"]), float(params["depth"]), float(params["nu"])
+    rho0, g = float(params["rho0"]), float(params["g"])
+    x_from, x_to, t_from = float(params["x_from"]), float(params["x_to"]), float(params["t_from"])
+    t_to = math.inf if params.get("t_to") is None else float(params["t_to"])
+    mu = rho0 * nu
+    with open_record(run_dir) as f:
+        grp = f.get("frames/fluid")
+        if grp is None or not all(k in grp for k in ("position", "velocity", "kind", "pressure", "density")):
+            raise MetricError("no /frames/fluid position, velocity, kind, pressure and density in the record")
+        dp = params.get("dp")
+        if dp is None:
+            fl = f.get("participants/fluid")
+            if fl is None or "dp" not in fl.attrs:
+                raise MetricError("no particle spacing: give dp (the fluid reported none)")
+            dp = float(fl.attrs["dp"])
+        times = grp["time"][:]
+        frames = [i for i, t in enumerate(times) if t_from - 1e-12 <= t <= t_to + 1e-12]
+        if not frames:
+            raise MetricError(f"no frame with {t_from} <= t <= {t_to} (frames reach t = {times[-1]:.4g})")
+        layers = max(1, int(round(D / dp)))
+        u_sum, z_sum, count = np.zeros(layers), np.zeros(layers), np.zeros(layers)
+        xs, heads = [], []
+        for i in frames:
+            x, v = grp["position"][i], grp["velocity"][i]
+            inside = (grp["kind"][i][..., 0] == 0) & (x[:, 0] > x_from) & (x[:, 0] < x_to)
+            layer = np.clip((x[inside, 1] / dp).astype(int), 0, layers - 1)
+            np.add.at(u_sum, layer, v[inside, 0])
+            np.add.at(z_sum, layer, x[inside, 1])
+            np.add.at(count, layer, 1)
+            deep = inside & (x[:, 1] < D - 2 * dp)
+            xs.append(x[deep, 0])
+            heads.append(grp["pressure"][i][deep, 0] + grp["density"][i][deep, 0] * g * x[deep, 1])
+    if np.any(count == 0):
+        raise MetricError("a layer of the section holds no particle: is depth the water's depth?")
+    u, z = u_sum / count, z_sum / count
+    s = z / D
+    exact = tau * D / (4.0 * mu) * (3.0 * s * s - 2.0 * s)
+    slope = np.polyfit(np.concatenate(xs), np.concatenate(heads), 1)[0]
+    return {"l2_rel": float(np.sqrt(np.sum((u - exact) ** 2) / np.sum(exact ** 2))),
+            "velocity_scale": float(np.sum(u * exact) / np.sum(exact ** 2)),
+            "setup_ratio": float(slope / (3.0 * tau / (2.0 * D))),
+            "frames": len(frames)}
+
+
 # ---------------------------------------------------------------------------------------------------
 
 

@@ -599,6 +599,47 @@ def test_surge_front_metric_on_a_constructed_record():
         assert "reach" in str(err), err
 
 
+def test_wind_basin_metric_on_a_constructed_record():
+    """A lattice layer whose x-velocity is 0.9 times the closed-basin profile and whose pressure holds the
+    set-up gradient exactly: velocity_scale 0.9, l2_rel 0.1, setup_ratio 1; particles outside the section
+    (moving at 1 m/s) and wall particles must not count."""
+    import h5py
+    import numpy as np
+    tau, D, nu, rho0, g, dp = 5.0, 0.04, 1e-3, 1000.0, 9.81, 0.002
+    mu = rho0 * nu
+    xs = np.arange(dp / 2, 0.4, dp)
+    zs = np.arange(dp / 2, D, dp)
+    fluid = np.array([(x, z) for x in xs for z in zs])
+    wall = np.array([(x, -dp / 2) for x in xs])
+    pos = np.vstack([fluid, wall])
+    kind = np.array([0] * len(fluid) + [1] * len(wall), dtype=np.int32)
+    s = pos[:, 1] / D
+    u = np.where((pos[:, 0] > 0.1) & (pos[:, 0] < 0.3), 0.9 * tau * D / (4 * mu) * (3 * s * s - 2 * s), 1.0)
+    vel = np.stack([np.where(kind == 0, u, 0.0), np.zeros(len(pos))], axis=1)
+    G = 3 * tau / (2 * D)
+    pressure = rho0 * g * (D - pos[:, 1]) + G * (pos[:, 0] - 0.2)
+    d = harness.out_dir("wind-metric")
+    times = [2.5, 3.0, 3.5, 4.0]
+    with h5py.File(os.path.join(d, "record.h5"), "w") as f:
+        f.attrs["status"] = "completed"
+        f.create_group("participants/fluid").attrs["dp"] = dp
+        f["frames/fluid/time"] = np.array(times)
+        for name, value in (("position", pos), ("velocity", vel), ("kind", kind[:, None]),
+                            ("pressure", pressure[:, None]), ("density", np.full((len(pos), 1), rho0))):
+            f[f"frames/fluid/{name}"] = np.stack([value] * len(times))
+    ctx = metrics.Context(metrics.RunInfo("r", d), [], harness.ROOT)
+    params = {"tau": tau, "depth": D, "nu": nu, "x_from": 0.1, "x_to": 0.3, "t_from": 3.0}
+    out = metrics.compute("wind_basin_profile", d, params, ctx)
+    assert out["frames"] == 3, out
+    assert abs(out["velocity_scale"] - 0.9) < 1e-9 and abs(out["l2_rel"] - 0.1) < 1e-9, out
+    assert abs(out["setup_ratio"] - 1.0) < 1e-6, out
+    try:
+        metrics.compute("wind_basin_profile", d, dict(params, t_from=5.0), ctx)
+        raise AssertionError("expected a MetricError: no frame after t = 4")
+    except metrics.MetricError as err:
+        assert "no frame" in str(err), err
+
+
 def test_fluid_sweep_counts_particle_steps():
     assert os.path.isfile(os.path.join(harness.BIN, "sphfsi-fluid")), "the fluid participant is not built"
     d = harness.out_dir("sweep-fluid")
