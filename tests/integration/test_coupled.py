@@ -17,6 +17,7 @@ COARSE = {
     "elastic_gate": ["run.end_time=0.05", "fluid.dp=0.004"],
     "elastic_obstacle": ["run.end_time=0.2", "fluid.dp=0.008"],
     "hydrostatic_plate": ["run.end_time=0.05", "fluid.dp=0.05"],
+    "wind_basin": ["run.end_time=0.05", "fluid.dp=0.008"],
 }
 
 
@@ -47,6 +48,7 @@ def test_structure_alone_starts_only_the_structure():
 def test_fluid_alone_starts_only_the_fluid():
     assert roles_in(run_coarse("fluid_only")) == ["fluid"]
     assert roles_in(run_coarse("dam_break")) == ["fluid"]
+    assert roles_in(run_coarse("wind_basin")) == ["fluid"]
 
 
 def test_coupled_scenes_run_end_to_end():
