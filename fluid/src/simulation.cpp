@@ -753,9 +753,9 @@ void Simulation2D::fail(std::size_t i, const std::string& quantity, double value
 // (a splash, or water spilling over the brim), which is physics, not a failure. "Over the top" allows the
 // centre to be up to the wall's thickness below the wall's top when it passes the outer face: water spilling
 // slowly over a brim rides the top with its centre at about the top surface and drops as soon as it rounds the
-// outer corner (a wind-driven basin filled to the brim put a spilling particle's centre 0.0003 m = 0.3 dp below
-// the top at dp = 1 mm, and that used to stop the run as "lost through the wall"). A particle that went through
-// the wall lower down is still a failure (check_state).
+// outer corner (the brim-full tank of tests/fluid/test_failure.cpp put a spilling particle's centre 0.13 mm
+// below the top at dp = 2.5 mm, and that used to stop the run as "lost through the wall"; so did a brim-full
+// wind-driven basin). A particle that went through the wall lower down is still a failure (check_state).
 bool Simulation2D::over_the_wall(const V& x) const {
     const auto& g = geometry_;
     return g.walls_x && !g.lid && x[1] > g.height - g.thickness && (x[0] < -g.thickness || x[0] > g.width + g.thickness);
