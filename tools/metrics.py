@@ -448,6 +448,16 @@ def front_x(pos, kind, dp, k=1, radius_dp=1.5):
     return math.nan
 
 
+def fluid_spacing(f, dp):
+    """dp as given, else the particle spacing the fluid reported at READY (/participants/fluid attribute dp)."""
+    if dp is not None:
+        return float(dp)
+    fl = f.get("participants/fluid")
+    if fl is None or "dp" not in fl.attrs:
+        raise MetricError("no particle spacing: give dp (the fluid reported none)")
+    return float(fl.attrs["dp"])
+
+
 def surge_front_series(run_dir, a, g=9.81, x0=0.0, dp=None, k=1, radius_dp=1.5, extent_dp=0.5, T_max=None):
     """(T, Z) of the dam-break surge front at the recorded fluid frames: T = t sqrt(2 g / a),
     Z = (x_front + extent_dp * dp - x0) / a."""
@@ -456,11 +466,7 @@ def surge_front_series(run_dir, a, g=9.81, x0=0.0, dp=None, k=1, radius_dp=1.5, 
         grp = f.get("frames/fluid")
         if grp is None or "position" not in grp or "kind" not in grp:
             raise MetricError("no /frames/fluid/position and kind in the record")
-        if dp is None:
-            fl = f.get("participants/fluid")
-            if fl is None or "dp" not in fl.attrs:
-                raise MetricError("no particle spacing: give dp (the fluid reported none)")
-            dp = float(fl.attrs["dp"])
+        dp = fluid_spacing(f, dp)
         times = grp["time"][:]
         T, Z = [], []
         for i, t in enumerate(times):
@@ -552,12 +558,7 @@ def wind_basin_profile(run_dir, params, context):
         grp = f.get("frames/fluid")
         if grp is None or not all(k in grp for k in ("position", "velocity", "kind", "pressure", "density")):
             raise MetricError("no /frames/fluid position, velocity, kind, pressure and density in the record")
-        dp = params.get("dp")
-        if dp is None:
-            fl = f.get("participants/fluid")
-            if fl is None or "dp" not in fl.attrs:
-                raise MetricError("no particle spacing: give dp (the fluid reported none)")
-            dp = float(fl.attrs["dp"])
+        dp = fluid_spacing(f, params.get("dp"))
         times = grp["time"][:]
         frames = [i for i, t in enumerate(times) if t_from - 1e-12 <= t <= t_to + 1e-12]
         if not frames:
