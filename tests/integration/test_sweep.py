@@ -600,24 +600,30 @@ def test_surge_front_metric_on_a_constructed_record():
 
 
 def test_wind_basin_metric_on_a_constructed_record():
-    """A lattice layer whose x-velocity is 0.9 times the closed-basin profile and whose pressure holds the
-    set-up gradient exactly: velocity_scale 0.9, l2_rel 0.1, setup_ratio 1; particles outside the section
-    (moving at 1 m/s) and wall particles must not count."""
+    """A layer whose surface is tilted by the set-up (depth h(x) = D + b (x - 0.2), b = 3 tau / (2 rho g D),
+    columns of 20 particles spaced h(x)/20 apart and dense in proportion), whose x-velocity is 0.9 times the
+    closed-basin profile at the local depth and whose pressure holds the set-up gradient exactly:
+    velocity_scale 0.9, l2_rel 0.1, setup_ratio 1, depth_ratio 1 (against the nominal depth, as this metric
+    measured before 2026-11-26, the same record gave l2_rel 0.114). Particles outside the section (moving at
+    1 m/s) and wall particles must not count."""
     import h5py
     import numpy as np
-    tau, D, nu, rho0, g, dp = 5.0, 0.04, 1e-3, 1000.0, 9.81, 0.002
+    tau, D, nu, rho0, g, dp, n = 5.0, 0.04, 1e-3, 1000.0, 9.81, 0.002, 20
     mu = rho0 * nu
     xs = np.arange(dp / 2, 0.4, dp)
-    zs = np.arange(dp / 2, D, dp)
-    fluid = np.array([(x, z) for x in xs for z in zs])
+    depth = D + 3 * tau / (2 * rho0 * g * D) * (xs - 0.2)
+    fluid = np.array([(x, (k + 0.5) * h / n) for x, h in zip(xs, depth) for k in range(n)])
+    fluid_rho = np.array([rho0 * dp * n / h for h in depth for _ in range(n)])
     wall = np.array([(x, -dp / 2) for x in xs])
     pos = np.vstack([fluid, wall])
+    rho = np.concatenate([fluid_rho, np.full(len(wall), rho0)])
     kind = np.array([0] * len(fluid) + [1] * len(wall), dtype=np.int32)
-    s = pos[:, 1] / D
-    u = np.where((pos[:, 0] > 0.1) & (pos[:, 0] < 0.3), 0.9 * tau * D / (4 * mu) * (3 * s * s - 2 * s), 1.0)
+    h = np.concatenate([np.repeat(depth, n), np.full(len(wall), D)])
+    s = pos[:, 1] / h
+    u = np.where((pos[:, 0] > 0.1) & (pos[:, 0] < 0.3), 0.9 * tau * h / (4 * mu) * (3 * s * s - 2 * s), 1.0)
     vel = np.stack([np.where(kind == 0, u, 0.0), np.zeros(len(pos))], axis=1)
     G = 3 * tau / (2 * D)
-    pressure = rho0 * g * (D - pos[:, 1]) + G * (pos[:, 0] - 0.2)
+    pressure = rho0 * g * D + G * (pos[:, 0] - 0.2) - rho * g * pos[:, 1]
     d = harness.out_dir("wind-metric")
     times = [2.5, 3.0, 3.5, 4.0]
     with h5py.File(os.path.join(d, "record.h5"), "w") as f:
@@ -625,14 +631,14 @@ def test_wind_basin_metric_on_a_constructed_record():
         f.create_group("participants/fluid").attrs["dp"] = dp
         f["frames/fluid/time"] = np.array(times)
         for name, value in (("position", pos), ("velocity", vel), ("kind", kind[:, None]),
-                            ("pressure", pressure[:, None]), ("density", np.full((len(pos), 1), rho0))):
+                            ("pressure", pressure[:, None]), ("density", rho[:, None])):
             f[f"frames/fluid/{name}"] = np.stack([value] * len(times))
     ctx = metrics.Context(metrics.RunInfo("r", d), [], harness.ROOT)
     params = {"tau": tau, "depth": D, "nu": nu, "x_from": 0.1, "x_to": 0.3, "t_from": 3.0}
     out = metrics.compute("wind_basin_profile", d, params, ctx)
     assert out["frames"] == 3, out
     assert abs(out["velocity_scale"] - 0.9) < 1e-9 and abs(out["l2_rel"] - 0.1) < 1e-9, out
-    assert abs(out["setup_ratio"] - 1.0) < 1e-6, out
+    assert abs(out["setup_ratio"] - 1.0) < 1e-6 and abs(out["depth_ratio"] - 1.0) < 1e-9, out
     try:
         metrics.compute("wind_basin_profile", d, dict(params, t_from=5.0), ctx)
         raise AssertionError("expected a MetricError: no frame after t = 4")
