@@ -19,9 +19,10 @@
 // the noise mixes momentum and the error is 13 %; with tau = 5 Pa it is 2.6 % (1.7 % at dp = D/30).
 // Tolerance: relative L2 error 5 % (issue 4).
 // The whole closed basin, end walls and all (scenarios/wind_basin.toml, sweeps/wind_basin.toml), does worse:
-// its circulation stirs the particles out of their lattice, and on the uneven arrangement the symmetric
-// pressure term's error, about 2 p_i sum_j V_j grad W_ij / rho_i, is the size of the set-up's small pressure
-// gradient; the profile is 9 % off at D/20 over t = 3 - 5 s and 15 % over 6 - 8 s (docs/validation.md).
+// its circulation stirs the particles out of their lattice, and on the uneven arrangement the pressure force
+// is spread wrongly over the depth (0.88 of the gradient in the interior, more under the surface, in
+// proportion to the drive); the profile is 8 % off at D/20 over t = 3 - 5 s and 14 - 15 % once steady
+// (docs/validation.md).
 #include <doctest/doctest.h>
 
 #include <algorithm>
