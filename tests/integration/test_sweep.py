@@ -275,7 +275,8 @@ def test_runner_kills_what_ignores_sigint():
     time.sleep(0.2)
     assert not harness.pid_alive(child), "the participant outlived the SIGKILL"
     assert res.timed_out and res.killed and res.exit_code == -9, vars(res)
-    assert 2.0 <= res.wall_s < 3.0, res.wall_s
+    # SIGINT at the 1 s timeout, SIGKILL 1 s later; 1.5 s of slack for a loaded 2-core machine.
+    assert 2.0 <= res.wall_s < 2.0 + 1.5, res.wall_s
     # The participant was never reaped by the coordinator: its CPU (about 1.5 s of a busy loop, less on a
     # loaded machine) was read from /proc before the kill.
     assert res.extra_cpu > 0.2 and res.cpu_s >= res.extra_cpu, vars(res)
