@@ -22,8 +22,10 @@ import argparse
 import os
 import sys
 
-import h5py
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from sweeplib.record import open_record  # noqa: E402
 
 
 def wendland_gradient_factor(r, h):
@@ -43,7 +45,7 @@ def main():
     ap.add_argument("--x-to", type=float, default=0.3)
     ap.add_argument("--g", type=float, default=9.81)
     args = ap.parse_args()
-    with h5py.File(os.path.join(args.run_dir, "record.h5"), "r", locking=False) as f:
+    with open_record(args.run_dir) as f:
         info = f["participants/fluid"].attrs
         h, m, rho0 = float(info["h"]), float(info["particle_mass"]), float(info["rho0"])
         frames = f["frames/fluid"]
@@ -58,7 +60,7 @@ def main():
             k = int(np.argmin(abs(times - t_want)))
             x, rho = frames["position"][k], frames["density"][k][:, 0]
             p, kind = frames["pressure"][k][:, 0], frames["kind"][k][:, 0]
-            live = kind != 3  # kind 3: particles that have left the domain
+            live = kind != 3  # Kind::Escaped (fluid/.../particles.hpp): left the domain
             x, rho, p, kind = x[live], rho[live], p[live], kind[live]
             exact = rho0 * g * (D + b * (x[:, 0] - x_mid) - x[:, 1])
             inner = np.where((kind == 0) & (x[:, 0] > args.x_from) & (x[:, 0] < args.x_to) &

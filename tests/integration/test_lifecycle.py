@@ -24,9 +24,13 @@ def run_fault(mode, expect, max_s, env=None, extra=()):
     assert code == 1, (code, text)
     assert expect in text, text
     assert took < max_s, f"took {took:.1f} s"
+    assert_failed_by_structure(out)
+    return text
+
+
+def assert_failed_by_structure(out):
     with harness.record(os.path.join(out, "record.h5")) as f:
         assert f.attrs["status"].startswith("failed: structure"), f.attrs["status"]
-    return text
 
 
 def test_crash_is_named():
@@ -69,8 +73,7 @@ def test_silent_participant_is_named_within_timeout():
     run.wait_for("structure connected")
     code, text = named_then_reaped(run, "error: structure has been silent for", 2.0)
     assert code == 1, (code, text)
-    with harness.record(os.path.join(out, "record.h5")) as f:
-        assert f.attrs["status"].startswith("failed: structure"), f.attrs["status"]
+    assert_failed_by_structure(out)
 
 
 def test_version_mismatch_is_refused_and_logged():
