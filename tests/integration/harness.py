@@ -4,6 +4,7 @@ Run a test file as  /usr/bin/python3 FILE --bin BUILD/bin [TEST_NAME ...]; with 
 its tests. Each test is a function named test_*; a failed assertion fails the process.
 """
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -18,6 +19,8 @@ PARTICIPANTS = os.path.join(ROOT, "tests", "participants")
 sys.path.insert(0, PARTICIPANTS)
 
 BIN = None
+_test_dirs = []    # the output folders of the test now running: removed if it passes, kept and named if it fails
+_shared_dirs = []  # folders several tests read: removed when the whole file passes
 
 
 def sphfsi(*args, timeout=60, env=None, check=None):
@@ -90,7 +93,19 @@ def participant_pid(line):
 
 
 def out_dir(name):
-    return tempfile.mkdtemp(prefix=f"sphfsi-{name}-")
+    """A fresh output folder for the running test. main() removes it when the test passes (a run's record is
+    up to 40 MB, and a suite run makes about 200 of them) and keeps it, naming it, when the test fails."""
+    path = tempfile.mkdtemp(prefix=f"sphfsi-{name}-")
+    _test_dirs.append(path)
+    return path
+
+
+def shared_out_dir(name):
+    """An output folder that several tests of one file read (a run made once for all of them): removed after
+    the last test if every test passed, kept and named otherwise."""
+    path = tempfile.mkdtemp(prefix=f"sphfsi-{name}-")
+    _shared_dirs.append(path)
+    return path
 
 
 def record(path):
@@ -112,13 +127,23 @@ def main(module_globals):
     failed = 0
     for name in names:
         start = time.time()
+        _test_dirs.clear()
         try:
             module_globals[name]()
             print(f"PASS {name} ({time.time() - start:.1f} s)")
+            for path in _test_dirs:
+                shutil.rmtree(path, ignore_errors=True)
         except Exception as e:  # report every failure, then fail the process
             failed += 1
             import traceback
             traceback.print_exc()
             print(f"FAIL {name}: {e}")
+            for path in _test_dirs:
+                print(f"  kept for inspection: {path}")
+    for path in _shared_dirs:
+        if failed:
+            print(f"kept for inspection: {path}")
+        else:
+            shutil.rmtree(path, ignore_errors=True)
     print(f"{len(names) - failed} passed, {failed} failed")
     sys.exit(1 if failed else 0)

@@ -71,7 +71,7 @@ _MESH = {}
 def mesh_sweep():
     if _MESH:
         return _MESH["out"], _MESH["text"], _MESH["rc"]
-    d = harness.out_dir("sweep-mesh")
+    d = harness.shared_out_dir("sweep-mesh")
     scene = os.path.relpath(BEAM, d)  # the scene is found relative to the sweep file
     path = write(os.path.join(d, "mesh.toml"), f'''
 [sweep]
