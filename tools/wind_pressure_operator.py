@@ -14,9 +14,12 @@ theory's -3 tau / (2 rho0 D), of
   - the difference part with the kernel gradient correction (Bonet & Lok 1999), exact for a linear field;
   - the symmetric term with the run's own pressures.
 The kernel is the Wendland quintic C2 (the scene's); h, the particle mass and rho0 come from the record.
-docs/validation.md ("Wind-driven closed basin") quotes its output.
+With --window T0,T1 it takes every frame in that time window and ends with their mean: single frames
+scatter (at dp = D/20 the zeroth-order part read -0.026 at t = 3.5 s and -0.087 at t = 4 s), so compare
+windows. docs/validation.md ("Wind-driven closed basin") quotes its output.
 
     /usr/bin/python3 tools/wind_pressure_operator.py RUN_DIR --tau 5 --depth 0.04 --times 4.5,8
+    /usr/bin/python3 tools/wind_pressure_operator.py RUN_DIR --tau 5 --depth 0.04 --window 6,8
 """
 import argparse
 import os
@@ -40,7 +43,9 @@ def main():
     ap.add_argument("run_dir")
     ap.add_argument("--tau", type=float, required=True, help="surface stress [Pa]")
     ap.add_argument("--depth", type=float, required=True, help="mean water depth D [m]")
-    ap.add_argument("--times", required=True, help="comma-separated frame times [s]")
+    which = ap.add_mutually_exclusive_group(required=True)
+    which.add_argument("--times", help="comma-separated frame times [s]")
+    which.add_argument("--window", help="T0,T1: every frame with T0 <= t <= T1, then their mean [s]")
     ap.add_argument("--x-from", type=float, default=0.1)
     ap.add_argument("--x-to", type=float, default=0.3)
     ap.add_argument("--g", type=float, default=9.81)
@@ -56,8 +61,15 @@ def main():
         theory = -1.5 * tau / (D * rho0)
         print(f"# fractions of the theory's {theory:.4g} m/s^2 (h = {h:g} m, m = {m:g} kg/m)")
         print("t sym_exact zeroth_exact difference_exact kgc_difference_exact sym_run")
-        for t_want in (float(s) for s in args.times.split(",")):
-            k = int(np.argmin(abs(times - t_want)))
+        if args.times:
+            picked = [int(np.argmin(abs(times - float(s)))) for s in args.times.split(",")]
+        else:
+            t0, t1 = (float(s) for s in args.window.split(","))
+            picked = [k for k, t in enumerate(times) if t0 - 1e-9 <= t <= t1 + 1e-9]
+            if not picked:
+                raise SystemExit(f"no frame with {t0} <= t <= {t1} (frames reach t = {times[-1]:g})")
+        rows = []
+        for k in picked:
             x, rho = frames["position"][k], frames["density"][k][:, 0]
             p, kind = frames["pressure"][k][:, 0], frames["kind"][k][:, 0]
             live = kind != 3  # Kind::Escaped (fluid/.../particles.hpp): left the domain
@@ -80,7 +92,10 @@ def main():
                          difference[0],
                          np.linalg.solve(moment.T, difference)[0],
                          symmetric(p).sum(0)[0]]
-            print(f"{times[k]:g} " + " ".join(f"{v:.3f}" for v in sums / len(inner) / theory))
+            rows.append(sums / len(inner) / theory)
+            print(f"{times[k]:g} " + " ".join(f"{v:.3f}" for v in rows[-1]))
+        if args.window:
+            print(f"mean({len(rows)}) " + " ".join(f"{v:.3f}" for v in np.mean(rows, axis=0)))
     return 0
 
 
