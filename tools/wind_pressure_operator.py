@@ -6,7 +6,8 @@ the operator on the arrangement the particles have taken, and the pressure field
 frame asked for, over the fluid particles of the section x_from < x < x_to more than one support radius from
 the bottom and the nominal surface, it prints the mean x-acceleration as a fraction of the lubrication
 theory's -3 tau / (2 rho0 D), of
-  - the solver's symmetric term -sum_j m (p_i/rho_i^2 + p_j/rho_j^2) grad W_ij (fluid/.../interaction.hpp)
+  - the solver's symmetric term -sum_j m (p_i/rho_i^2 + p_j/rho_j^2) grad W_ij (fluid/.../interaction.hpp),
+    uncorrected (pressure.kernel_correction = false; the scene corrects it since 2026-11-26)
     applied to the exact pressure rho0 g (D + b (x - x_mid) - y), b = 3 tau / (2 rho0 g D), on every
     particle, walls included (what the Adami walls aim at);
   - its zeroth-order part -2 p_i / rho_i sum_j V_j grad W_ij (zero on a lattice, whatever p is);

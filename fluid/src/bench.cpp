@@ -2,7 +2,8 @@
 // 0.5 m tank) at about 10k, 40k and 160k fluid particles, 1 and 2 threads, for each pressure model.
 // Set-up as in DualSPHysics's dam-break benchmarks: Wendland kernel, h = 1.41 dp, artificial viscosity
 // (alpha = 0.02), Adami walls, symplectic (semi-implicit) Euler; WCSPH with Fourtakas density diffusion;
-// PCISPH with summation densities (eta = 1 %); standard SPH with k = 1000 m^2/s^2.
+// PCISPH with summation densities (eta = 1 %); standard SPH with k = 1000 m^2/s^2. A model named with
+// "+kgc" (wcsph+kgc, standard+kgc) runs with pressure.kernel_correction = true, to time the correction.
 //
 //   sphfsi-fluid-bench [--sizes 10k,40k,160k] [--threads 1,2] [--models wcsph,pcisph,standard] [--steps N]
 //
@@ -35,7 +36,9 @@ std::vector<std::string> split(const std::string& s) {
     return out;
 }
 
-Value scene(double dp, const std::string& model, int threads) {
+Value scene(double dp, const std::string& name, int threads) {
+    const bool corrected = name.ends_with("+kgc");
+    const std::string model = corrected ? name.substr(0, name.size() - 4) : name;
     Value f;
     f.make_table();
     auto set = [&](const char* k, Value v) { sphfsi::set_path(f, k, std::move(v)); };
@@ -50,6 +53,7 @@ Value scene(double dp, const std::string& model, int threads) {
     set("boundary.model", "adami");
     set("time.integrator", "symplectic_euler");
     set("pressure.model", model);
+    set("pressure.kernel_correction", corrected);
     set("density.method", model == "pcisph" ? "summation" : "continuity");
     set("density.diffusion", model == "pcisph" ? "none" : "fourtakas");
     Value::Table block;
@@ -87,7 +91,7 @@ int main(int argc, char** argv) {
         else if (!v.empty() && a == "--steps" && std::atoi(v.c_str()) > 0) steps = std::atoi(v.c_str());
         else {
             const bool help = a == "--help" || a == "-h";
-            std::fprintf(help ? stdout : stderr, "usage: %s [--sizes 10k,40k,160k] [--threads 1,2] [--models wcsph,pcisph,standard] [--steps N > 0]\n", argv[0]);
+            std::fprintf(help ? stdout : stderr, "usage: %s [--sizes 10k,40k,160k] [--threads 1,2] [--models wcsph,pcisph,standard,wcsph+kgc,standard+kgc] [--steps N > 0]\n", argv[0]);
             return help ? 0 : 2;
         }
     }

@@ -72,6 +72,10 @@ void check_combinations(const Value& fluid, const std::string& path, Errors& err
         errors.add(&density, "key '" + key(path, "density.method") +
                                  "': PCISPH predicts densities by summation; allowed with pressure.model = \"pcisph\": "
                                  "\"summation\", \"shepard\"");
+    if (model == "pcisph" && pressure.at("kernel_correction").as_bool())
+        errors.add(&pressure, "key '" + key(path, "pressure.kernel_correction") +
+                                  "': corrects the pressure term of standard SPH and WCSPH; PCISPH's pressure force is its own; "
+                                  "allowed with pressure.model = \"pcisph\": false");
     if (density.at("diffusion").as_string() != "none" && method != "continuity")
         errors.add(&density, "key '" + key(path, "density.diffusion") +
                                  "': density diffusion (delta-SPH) is a term of the continuity equation; it needs "
@@ -170,6 +174,11 @@ TableSchema build() {
                      "set negative fluid pressures to zero (stops free-surface particles from pulling together, "
                      "which summation densities would otherwise cause)")
         .fallback(true);
+    pressure.boolean("kernel_correction",
+                     "correct each pair's kernel gradient in the pressure term by the mean of the two particles' "
+                     "inverse moment matrices, so that uneven arrangements carry no spurious shear stress (conserves "
+                     "momentum; not at the free surface; fluid/include/sphfsi/fluid/pressure_correction.hpp)")
+        .fallback(false);
     pressure.number("eta", "PCISPH: iterate until the largest density error is below eta * rho0")
         .greater_than(0).less_than(1).fallback(0.01);
     pressure.integer("min_iterations", "PCISPH: fewest corrections per step").at_least(1).fallback(3);

@@ -72,6 +72,7 @@ FluidSettings read_settings(const sphfsi::Value& raw) {
     s.gamma = p.at("gamma").as_double();
     s.background = p.at("background").as_double();
     s.clamp_negative = p.at("clamp_negative").as_bool();
+    s.kernel_correction = p.at("kernel_correction").as_bool();
     s.eta = p.at("eta").as_double();
     s.min_iterations = static_cast<int>(p.at("min_iterations").as_int());
     s.max_iterations = static_cast<int>(p.at("max_iterations").as_int());

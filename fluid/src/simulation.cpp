@@ -288,6 +288,7 @@ void Simulation2D::evaluate() {
             rho_scratch_.resize(n);
             floor = KinematicFloor{kinematic_cap_, mass_ * kinematic_norm_, rho_scratch_.data()};
         }
+        update_correction(kg);
         compute_rates(P, grid_, kw, kg, ViscosityKernel<Dim>(h_), fill_rate_factors(), rates_,
                       kinematic_floor_ ? &floor : nullptr);
         if (surface_.on()) apply_surface_stress(P, grid_, kg, mass_, surface_);
@@ -399,6 +400,7 @@ void Simulation2D::refresh_solid_rates() {
             }
         });
         // The factors of all particles: the buffer is scratch (the sort reuses it), not state.
+        update_correction(kg);  // the solids moved: the matrices of their fluid neighbours changed
         compute_rates(P, grid_, kw, kg, ViscosityKernel<Dim>(h_), fill_rate_factors(), rates_, nullptr,
                       near_solid_.data());
         if (surface_.on()) apply_surface_stress(P, grid_, kg, mass_, surface_, near_solid_.data());
@@ -884,7 +886,7 @@ Simulation2D::Energy Simulation2D::mechanical_energy() const {
 std::size_t Simulation2D::memory_bytes() const {
     return st_.P.memory_bytes() + (has_saved_ ? saved_.P.memory_bytes() : 0) + grid_.memory_bytes() +
            order_.capacity() * sizeof(std::uint32_t) + scratch_.capacity() + rho_scratch_.capacity() * sizeof(double) +
-           pci_.memory_bytes();
+           pci_.memory_bytes() + correction_.capacity() * sizeof(Mat<Dim>);
 }
 
 void Simulation2D::save() {

@@ -18,11 +18,11 @@
 // 2 s <= t <= 4 s in layers of one dp. The flow must stand well above that noise: with tau = 1 Pa (5 mm/s)
 // the noise mixes momentum and the error is 13 %; with tau = 5 Pa it is 2.6 % (1.7 % at dp = D/30).
 // Tolerance: relative L2 error 5 % (issue 4).
-// The whole closed basin, end walls and all (scenarios/wind_basin.toml, sweeps/wind_basin.toml), does worse:
-// its circulation stirs the particles out of their lattice, and on the uneven arrangement the pressure force
-// is spread wrongly over the depth (0.88 of the gradient in the interior, more under the surface, in
-// proportion to the drive); the profile is 8 % off at D/20 over t = 3 - 5 s and 14 - 15 % once steady
-// (docs/validation.md).
+// The whole closed basin, end walls and all (scenarios/wind_basin.toml, sweeps/wind_basin.toml), did worse
+// with the plain pressure term: its circulation stirs the particles out of their lattice, and on an uneven
+// arrangement the pressure term carries part of the shear stress, so the profile was 8 % off at D/20 over
+// t = 3 - 5 s and 14 - 15 % once steady. The scene now corrects the pressure term's kernel gradient
+// (test_pressure_correction.cpp, docs/validation.md).
 #include <doctest/doctest.h>
 
 #include <algorithm>

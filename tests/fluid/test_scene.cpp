@@ -55,6 +55,8 @@ TEST_SUITE("scene") {
         CHECK(problems(with(dam_break(0.005), {{"pressure.model", "pcisph"}})).find("PCISPH predicts densities by summation") != std::string::npos);
         CHECK(problems(with(dam_break(0.005), {{"pressure.model", "pcisph"}, {"density.method", "summation"}, {"time.integrator", "velocity_verlet"}})).find("symplectic_euler") != std::string::npos);
         CHECK(problems(with(dam_break(0.005), {{"density.method", "summation"}, {"density.diffusion", "molteni"}})).find("continuity") != std::string::npos);
+        CHECK(problems(with(dam_break(0.005), {{"pressure.model", "pcisph"}, {"density.method", "summation"}, {"pressure.kernel_correction", true}}))
+                  .find("pressure.kernel_correction") != std::string::npos);
         CHECK(problems(with(dam_break(0.005), {{"tank.lid_velocity", vec2(1.0, 0.0)}})).find("closed_top") != std::string::npos);
         CHECK(problems(with(dam_break(0.005), {{"periodic", "x"}, {"tank.width", 0.02}})).find("3 kernel support radii") != std::string::npos);
         CHECK(problems(with(dam_break(0.005), {{"kernel", "quartic"}})).find("allowed: one of") != std::string::npos);

@@ -7,8 +7,9 @@
 // buffers), at the price of visiting each pair twice.
 //
 // Pressure term (Monaghan 1992): a_i = -sum_j m_j (p_i/rho_i^2 + p_j/rho_j^2) grad_i W_ij, the
-// momentum-conserving symmetric form; every pair term is antisymmetric so the fluid's momentum change due
-// to a solid particle is exactly minus the force we report on it.
+// momentum-conserving symmetric form, optionally with the pair-mean kernel gradient correction
+// (pressure_correction.hpp); every pair term is antisymmetric so the fluid's momentum change due to a solid
+// particle is exactly minus the force we report on it.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -17,6 +18,7 @@
 #include "sphfsi/fluid/density_diffusion.hpp"
 #include "sphfsi/fluid/kernels.hpp"
 #include "sphfsi/fluid/particles.hpp"
+#include "sphfsi/fluid/pressure_correction.hpp"
 #include "sphfsi/fluid/viscosity.hpp"
 
 namespace sphfsi::fluid {
@@ -32,6 +34,7 @@ struct RateParams {
     bool repulsive = false;          // Monaghan (1994) wall force
     double repulsive_d = 0.0, repulsive_r0 = 0.0;
     Vec<Dim> gravity{};
+    const Mat<Dim>* correction = nullptr;  // per particle L (pressure_correction.hpp); null: uncorrected
 };
 
 // Per-particle factors of the pair terms, computed once per evaluation instead of once per pair: p/rho^2
@@ -128,7 +131,13 @@ void compute_rates(ParticleStore<Dim>& P, const CellGrid<Dim>& grid, const Kerne
                     if (floor_i) kernel_sum += kw.w(rr);
                     const double rho_j = rho[j];
                     const RateFactors fj = factors[j];
-                    double coef = -(pr2_i + fj.pr2);
+                    // The pressure term, with the pair's mean correction when asked for (the viscous and
+                    // repulsive terms are not corrected).
+                    double coef = 0.0;
+                    if (prm.correction)
+                        acc += pair_corrected(prm.correction[i], prm.correction[j], dx) * (-(pr2_i + fj.pr2) * F);
+                    else
+                        coef = -(pr2_i + fj.pr2);
                     const bool viscous = fluid_j || prm.viscous_walls;
                     if (vmodel != ViscosityModel::None && viscous) {
                         const V vij = vi_visc - (fluid_j ? v[j] : vv[j]);

@@ -46,6 +46,7 @@ struct FluidSettings {
     PressureModel pressure = PressureModel::Wcsph;
     double k = 1000.0, c0 = 0.0, u_max = 0.0, gamma = 7.0, background = 0.0;
     bool clamp_negative = true;
+    bool kernel_correction = false;  // pressure_correction.hpp
     double eta = 0.01;
     int min_iterations = 3, max_iterations = 50;
 

@@ -106,6 +106,13 @@ private:
     void evaluate();
     void refresh_solid_rates();
     const RateFactors* fill_rate_factors();  // into scratch_, for compute_rates
+    // The pressure term's correction matrices for the positions now held (pressure.kernel_correction only).
+    template <class KernelG>
+    void update_correction(const KernelG& kg) {
+        if (!s_.kernel_correction) return;
+        correction_matrices(st_.P, grid_, kg, mass_, correction_);
+        rates_.correction = correction_.data();
+    }
     double boundary_density(double p) const;
     void sort_particles();
     void move_solids(double t);
@@ -164,6 +171,7 @@ private:
     // kinematic floor's densities from the rate pass, 1/rho for the continuity pass (a division per
     // particle instead of one per pair).
     std::vector<double> rho_scratch_;
+    std::vector<Mat<Dim>> correction_;  // per particle L of the pressure correction, recomputed each evaluation
     PcisphScratch<Dim> pci_;
     std::unique_ptr<std::ofstream> step_log_;
 };

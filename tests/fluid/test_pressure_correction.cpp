@@ -1,0 +1,152 @@
+// The pair-mean kernel gradient correction of the pressure term (pressure.kernel_correction,
+// fluid/include/sphfsi/fluid/pressure_correction.hpp).
+//
+// 1. Stress carried by a uniform pressure. On a lattice stretched 1.25 : 0.8 and turned 30 degrees, the
+//    uncorrected pair forces of a uniform pressure p carry, per particle, the stress p M with M the second
+//    moment of the kernel gradient: 1.7 % of p as shear. Corrected, p I exactly (L M = I on a lattice, where
+//    every L is the same). Reference: the stress of a fluid at rest, p I. Tolerance: 1e-12 (round-off).
+// 2. Wind-driven flow from an uneven start. The periodic section of the wind basin (as in
+//    test_channel_flows.cpp, at the basin's depth D = 0.04 m, 20 dp wide), but started from the lattice with
+//    each particle moved by up to 0.3 dp in x and y, so the flow runs on an uneven arrangement like the one
+//    the closed basin's circulation leaves. Reference: u(z) = tau D/(4 mu) (3 s^2 - 2 s). Tolerance: relative L2
+//    error 5 % (issue 4) of the profile averaged over 2 s <= t <= 4 s in layers of dp. Measured: 1.8 %
+//    corrected; 10.6 % with the same start uncorrected (the flow 7 - 9 % too slow), and within 3 % uncorrected
+//    from the undisturbed lattice.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <random>
+#include <vector>
+
+#include "run_helpers.hpp"
+#include "scenes.hpp"
+#include "sphfsi/fluid/cell_grid.hpp"
+#include "sphfsi/fluid/kernels.hpp"
+#include "sphfsi/fluid/particles.hpp"
+#include "sphfsi/fluid/pressure_correction.hpp"
+
+using namespace sphfsi::fluid;
+using namespace fluid_test;
+
+TEST_SUITE("pressure_correction") {
+    TEST_CASE("a uniform pressure carries an isotropic stress on an anisotropic lattice once corrected") {
+        const double a = 1.25, b = 0.8, turn = std::numbers::pi / 6, h = 1.5, rho0 = 1000.0, mass = rho0 * a * b;
+        const int n = 20;
+        ParticleStore<2> P;
+        P.resize(static_cast<std::size_t>((2 * n) * (2 * n)));
+        std::size_t k = 0;
+        for (int i = -n; i < n; ++i)
+            for (int j = -n; j < n; ++j, ++k) {
+                const double u = i * a, w = j * b;
+                P.x[k] = Vec2{{std::cos(turn) * u - std::sin(turn) * w, std::sin(turn) * u + std::cos(turn) * w}};
+                P.rho[k] = rho0;
+                P.kind[k] = Kind::Fluid;
+                P.div_r[k] = 2.0f;  // a full support: corrected
+            }
+        CellGrid<2> grid;
+        grid.configure(Vec2{{-40.0, -40.0}}, Vec2{{40.0, 40.0}}, 2.0 * h, {false, false});
+        std::vector<std::uint32_t> order;
+        grid.build(P.x, order);
+        std::vector<unsigned char> scratch;
+        P.reorder(order, scratch);
+        const WendlandC2Kernel<2> kg(h);
+        std::vector<Mat<2>> L;
+        correction_matrices(P, grid, kg, mass, L);
+
+        // The particle nearest the centre, far from the patch's edges, and its pairs.
+        std::size_t c = 0;
+        for (std::size_t q = 0; q < P.size(); ++q)
+            if (norm2(P.x[q]) < norm2(P.x[c])) c = q;
+        const double p = 1.0, V = mass / rho0;
+        double plain[4] = {}, corrected[4] = {}, LM[4] = {};
+        for (std::size_t q = 0; q < P.size(); ++q) {
+            const Vec2 d = P.x[c] - P.x[q];
+            const double r = std::sqrt(norm2(d));
+            if (q == c || r >= 2.0 * h) continue;
+            const double F = kg.grad_factor(r);
+            // Per-particle stress of the pair forces, sum_j f_ij (x) x_ij / (2 V), with f_ij of the symmetric
+            // term at uniform p: -2 p V^2 F x_ij uncorrected, (L_i + L_j)/2 x_ij in place of x_ij corrected.
+            const Vec2 dc = pair_corrected(L[c], L[q], d);
+            for (int u = 0; u < 2; ++u)
+                for (int w = 0; w < 2; ++w) {
+                    plain[2 * u + w] += -2.0 * p * V * V * F * d[u] * d[w] / (2.0 * V);
+                    corrected[2 * u + w] += -2.0 * p * V * V * F * dc[u] * d[w] / (2.0 * V);
+                }
+        }
+        for (int u = 0; u < 2; ++u)
+            for (int w = 0; w < 2; ++w)
+                for (int v = 0; v < 2; ++v) LM[2 * u + w] += L[c][static_cast<std::size_t>(2 * u + v)] * plain[2 * v + w] / p;
+        std::printf("uniform p on the turned lattice: uncorrected stress [%.4f %.4f; %.4f %.4f] p, corrected [%.2e %.2e; %.2e %.2e] "
+                    "- p I\n", plain[0], plain[1], plain[2], plain[3], corrected[0] - p, corrected[1], corrected[2], corrected[3] - p);
+        CHECK(std::abs(plain[1]) > 0.01 * p);  // the lattice is anisotropic enough to show the defect
+        for (int u = 0; u < 2; ++u)
+            for (int w = 0; w < 2; ++w) {
+                const double want = u == w ? p : 0.0;
+                CHECK(std::abs(corrected[2 * u + w] - want) < 1e-12);
+                CHECK(std::abs(LM[2 * u + w] - (u == w ? 1.0 : 0.0)) < 1e-12);
+            }
+    }
+
+    TEST_CASE("wind-driven flow from a jittered lattice is within 5 % once corrected") {
+        const double D = 0.04, dp = D / 20, nu = 1e-3, tau = 5.0, rho0 = 1000.0, W = 20 * dp, mu = rho0 * nu;
+        Value f;
+        f.make_table();
+        f = with(f, {{"dp", dp},
+                     {"periodic", "x"},
+                     {"tank.width", W},
+                     {"tank.height", 1.5 * D},
+                     {"pressure.model", "wcsph"},
+                     {"pressure.c0", 8.86},  // the closed basin's, 10 sqrt(2 g D)
+                     {"pressure.kernel_correction", true},
+                     {"density.method", "continuity"},
+                     {"density.diffusion", "fourtakas"},
+                     {"viscosity.model", "morris"},
+                     {"viscosity.nu", nu},
+                     {"boundary.model", "adami"},
+                     {"free_surface.wind_shear", vec2(tau, 0.0)}});
+        f.as_table_mut()["gravity"] = vec2(-3 * tau / (2 * rho0 * D), -9.81);
+        f.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, W, D)});
+        auto s = start(f);
+        {
+            // The uneven start. The solver offers no way to move particles (a scene never needs one), so the
+            // test writes the positions it has just been given; they are re-sorted at the first step.
+            auto& P = const_cast<ParticleStore<2>&>(s->simulation().particles());
+            std::mt19937 rng(7);
+            std::uniform_real_distribution<double> jitter(-0.3 * dp, 0.3 * dp);
+            for (std::size_t i = 0; i < P.size(); ++i)
+                if (P.kind[i] == Kind::Fluid) {
+                    P.x[i][0] += jitter(rng);
+                    P.x[i][1] = std::max(0.5 * dp, P.x[i][1] + jitter(rng));
+                }
+        }
+        run(*s, 2.0, 0.05);
+        const int layers = static_cast<int>(std::lround(D / dp));
+        std::vector<double> u_sum(layers, 0.0), z_sum(layers, 0.0);
+        std::vector<int> count(layers, 0);
+        while (s->simulation().time() < 4.0 - 1e-9) {
+            run(*s, s->simulation().time() + 0.05, 0.05);
+            const auto& P = s->simulation().particles();
+            for (std::size_t i = 0; i < P.size(); ++i) {
+                if (P.kind[i] != Kind::Fluid) continue;
+                const int l = std::clamp(static_cast<int>(P.x[i][1] / dp), 0, layers - 1);
+                u_sum[l] += P.v[i][0];
+                z_sum[l] += P.x[i][1];
+                ++count[l];
+            }
+        }
+        double num = 0.0, den = 0.0;
+        for (int l = 0; l < layers; ++l) {
+            REQUIRE(count[l] > 0);
+            const double sz = z_sum[l] / count[l] / D, u = u_sum[l] / count[l];
+            const double exact = tau * D / (4 * mu) * (3 * sz * sz - 2 * sz);
+            num += (u - exact) * (u - exact);
+            den += exact * exact;
+        }
+        const double e = std::sqrt(num / den);
+        std::printf("jittered wind section, corrected: relative L2 error %.2f %% over t = 2 - 4 s (tolerance 5 %%)\n", 100 * e);
+        CHECK(e < 0.05);
+    }
+}
