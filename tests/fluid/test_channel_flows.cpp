@@ -33,6 +33,7 @@
 
 #include "run_helpers.hpp"
 #include "scenes.hpp"
+#include "wind_section.hpp"
 
 using namespace fluid_test;
 using sphfsi::fluid::Kind;
@@ -125,50 +126,17 @@ TEST_SUITE("channel_flows") {
 
 TEST_SUITE("wind") {
     TEST_CASE("wind-driven flow in a closed basin") {
-        const double D = 0.02, dp = D / 20, nu = 1e-3, tau = 5.0, rho0 = 1000.0, W = 10 * dp;
-        Value f;
-        f.make_table();
-        f = with(f, {{"dp", dp},
-                     {"periodic", "x"},
-                     {"tank.width", W},
-                     {"tank.height", 1.5 * D},
-                     {"pressure.model", "wcsph"},
-                     {"density.method", "continuity"},
-                     {"density.diffusion", "fourtakas"},
-                     {"viscosity.model", "morris"},
-                     {"viscosity.nu", nu},
-                     {"boundary.model", "adami"},
-                     {"free_surface.wind_shear", vec2(tau, 0.0)}});
-        f.as_table_mut()["gravity"] = vec2(-3 * tau / (2 * rho0 * D), -9.81);
-        f.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, W, D)});
-        auto s = start(f);
-        const double mu = rho0 * nu;
-        const int layers = static_cast<int>(std::lround(D / dp));
-        std::vector<double> u_sum(layers, 0.0), z_sum(layers, 0.0);
-        std::vector<int> count(layers, 0);
+        const double D = 0.02, dp = D / 20, nu = 1e-3, tau = 5.0, W = 10 * dp;
+        auto s = start(wind_section(D, dp, W, tau, nu));
+        LayerProfile profile(D, dp);
         std::size_t crossings = 0;
         run(*s, 2.0, 0.05, [&](const auto&) { crossings += s->simulation().wall_crossings().count; });
         while (s->simulation().time() < 4.0 - 1e-9) {
             run(*s, s->simulation().time() + 0.05, 0.05);
             crossings += s->simulation().wall_crossings().count;
-            const auto& P = s->simulation().particles();
-            for (std::size_t i = 0; i < P.size(); ++i) {
-                if (P.kind[i] != Kind::Fluid) continue;
-                const int l = std::clamp(static_cast<int>(P.x[i][1] / dp), 0, layers - 1);
-                u_sum[l] += P.v[i][0];
-                z_sum[l] += P.x[i][1];
-                ++count[l];
-            }
+            profile.add(s->simulation().particles());
         }
-        double num = 0.0, den = 0.0;
-        for (int l = 0; l < layers; ++l) {
-            const double z = z_sum[l] / count[l], sz = z / D, u = u_sum[l] / count[l];
-            const double exact = tau * D / (4 * mu) * (3 * sz * sz - 2 * sz);
-            num += (u - exact) * (u - exact);
-            den += exact * exact;
-            std::printf("wind: z = %.4f m  u = %+.5f m/s  exact %+.5f m/s\n", z, u, exact);
-        }
-        const double e = std::sqrt(num / den);
+        const double e = profile.l2_error(tau, wind_rho0 * nu, "wind");
         std::printf("wind: relative L2 error of the time-averaged profile %.2f %% (tolerance 5 %%)\n", 100 * e);
         CHECK(e < 0.05);
         CHECK(crossings == 0);
