@@ -355,7 +355,10 @@ double Simulation2D::boundary_density(double p) const {
 // particles within a support of one are recomputed, each exactly as a full evaluation would (same state,
 // same neighbour order); for symplectic Euler and predictor-corrector nothing else has changed since the
 // end-of-window evaluation, so the rates are those of a full evaluation at a fraction of its cost. (Velocity Verlet's closing evaluation saw v^{n+1/2}; the recomputed particles see v^{n+1}, as
-// a full evaluation at the window start would.) With dummy walls (no a_w in the wall pressure) and PCISPH
+// a full evaluation at the window start would.) With the pressure correction the solids' densities also
+// enter the matrices L of their fluid neighbours, and through the pair terms (L_i + L_j)/2 the rates of those
+// neighbours' neighbours: that second ring is recomputed too (tests/fluid/test_adapter.cpp compares the
+// shortcut with a full evaluation bit for bit). With dummy walls (no a_w in the wall pressure) and PCISPH
 // (a_w enters its pressure solve, which reads it from solid_acc_) nothing else needs recomputing.
 void Simulation2D::refresh_solid_rates() {
     if (n_solid_ == 0 || !kinematics_ || !st_.rates_fresh) return;  // else the first step evaluates anyway
@@ -399,8 +402,25 @@ void Simulation2D::refresh_solid_rates() {
                         if (P.kind[f] == Kind::Fluid && norm2(P.x[w] - (P.x[f] + ranges[r].shift)) < R2) near_solid_[f] = 1;
             }
         });
+        if (s_.kernel_correction) {
+            // The solids' new densities change the matrices L of their fluid neighbours, and the pair terms
+            // (L_i + L_j)/2 of those neighbours' own neighbours with them: mark that second ring too.
+            grid_.for_each_cell([&](std::uint32_t cell, std::uint32_t begin, std::uint32_t end) {
+                typename CellGrid<Dim>::Range ranges[CellGrid<Dim>::max_ranges];
+                int nr = -1;
+                for (std::uint32_t i = begin; i < end; ++i) {
+                    if (near_solid_[i] != 1 || P.kind[i] != Kind::Fluid) continue;
+                    if (nr < 0) nr = grid_.ranges(cell, ranges);
+                    for (int r = 0; r < nr; ++r)
+                        for (std::uint32_t f = ranges[r].begin; f < ranges[r].end; ++f)
+                            if (P.kind[f] == Kind::Fluid && !near_solid_[f] &&
+                                norm2(P.x[i] - (P.x[f] + ranges[r].shift)) < R2)
+                                near_solid_[f] = 2;
+                }
+            });
+            update_correction(kg);
+        }
         // The factors of all particles: the buffer is scratch (the sort reuses it), not state.
-        update_correction(kg);  // the solids moved: the matrices of their fluid neighbours changed
         compute_rates(P, grid_, kw, kg, ViscosityKernel<Dim>(h_), fill_rate_factors(), rates_, nullptr,
                       near_solid_.data());
         if (surface_.on()) apply_surface_stress(P, grid_, kg, mass_, surface_, near_solid_.data());

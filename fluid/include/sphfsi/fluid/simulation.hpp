@@ -85,6 +85,11 @@ public:
     struct Crossing { std::size_t count = 0; std::string first; };
     Crossing wall_crossings() const;
 
+    // Forgets the rates kept from the last evaluation, so that the next step evaluates everything afresh.
+    // A window normally starts from the rates of the last window's end, refreshed where the solids' new
+    // acceleration changes them (refresh_solid_rates); tests compare that shortcut with this.
+    void discard_rates() { st_.rates_fresh = false; }
+
     // In-memory save/restore (implicit coupling) and byte checkpoints (resume bit-identically).
     void save();
     void restore();
