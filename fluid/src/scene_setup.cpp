@@ -1,5 +1,7 @@
 #include "sphfsi/fluid/scene_setup.hpp"
 
+#include "sphfsi/fluid/gate.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -89,6 +91,17 @@ Scene2D build_scene(const FluidSettings& s) {
     const double head = lid ? T : std::max(H, s.water_top());
     scene.domain_hi = Vec2{{walls_x ? W + T : W, floor ? H + head : H}};
     return scene;
+}
+
+std::vector<Vec2> gate_particles(const FluidSettings& s) {
+    std::vector<Vec2> out;
+    if (!s.gate) return out;
+    const Gate& g = *s.gate;
+    const int nx = count_along(g.thickness, s.dp), ny = count_along(g.height, s.dp);
+    const double fx = g.thickness / nx, fy = g.height / ny;
+    for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) out.push_back(Vec2{{g.x0 + (i + 0.5) * fx, (j + 0.5) * fy}});
+    return out;
 }
 
 }  // namespace sphfsi::fluid

@@ -1,6 +1,7 @@
 // The [fluid] scene section. Units are SI; 2D quantities are per metre of depth.
 #include "sphfsi/fluid/schema.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -54,6 +55,40 @@ void check_boxes_inside_tank(const Value& fluid, const std::string& path, Errors
             ++j;
         }
         ++i;
+    }
+}
+
+// The gate stands on the floor inside the tank, beside the water, and rises through an open top.
+void check_gate(const Value& fluid, const std::string& path, Errors& errors) {
+    const Value* gate = fluid.find("gate");
+    if (!gate) return;
+    const Value& tank = fluid.at("tank");
+    const double W = num(tank, "width"), H = num(tank, "height"), dp = num(fluid, "dp");
+    const double x0 = num(*gate, "x0");
+    const double t = num(*gate, "thickness") > 0 ? num(*gate, "thickness") : static_cast<double>(tank.at("wall_layers").as_int()) * dp;
+    const double h = num(*gate, "height") > 0 ? num(*gate, "height") : H;
+    if (x0 < -slack || x0 + t > W + slack)
+        errors.add(gate, "key '" + key(path, "gate.x0") + "': the gate [" + std::to_string(x0) + ", " + std::to_string(x0 + t) +
+                             "] m does not lie inside the tank [0, " + std::to_string(W) + "] m");
+    if (h > H + slack)
+        errors.add(gate, "key '" + key(path, "gate.height") + "': higher than the tank (" + std::to_string(H) + " m)");
+    if (t < dp * (1 - 1e-9))
+        errors.add(gate, "key '" + key(path, "gate.thickness") + "': thinner than one particle spacing dp = " + std::to_string(dp) + " m");
+    const std::string periodic = fluid.at("periodic").as_string();
+    if (tank.at("closed_top").as_bool() || periodic == "y" || periodic == "xy")
+        errors.add(gate, "key '" + key(path, "gate") + "': the gate stands on the floor and rises out through an open top; "
+                                                        "it needs tank.closed_top = false and no periodic y axis");
+    for (const char* list : {"water", "obstacle"}) {
+        const Value* boxes = fluid.find(list);
+        if (!boxes) continue;
+        std::size_t i = 0;
+        for (const Value& b : boxes->as_array()) {
+            const bool overlap_x = num(b, "x0") < x0 + t - slack && x0 < num(b, "x0") + num(b, "width") - slack;
+            const bool overlap_y = num(b, "y0") < h - slack;
+            if (overlap_x && overlap_y)
+                errors.add(gate, "key '" + key(path, "gate") + "': overlaps " + list + "[" + std::to_string(i) + "]");
+            ++i;
+        }
     }
 }
 
@@ -159,6 +194,16 @@ TableSchema build() {
     obstacle.number("width", "width").unit("m").greater_than(0).required();
     obstacle.number("height", "height").unit("m").greater_than(0).required();
 
+    TableSchema& gate = s.table("gate", "a vertical gate standing on the floor that holds the water until t = 0 "
+                                        "and then rises at a constant speed until its bottom is where its top was "
+                                        "(the release of a dam-break experiment); without it the water is released "
+                                        "at once. Solid particles, like a coupled structure's; not with an "
+                                        "interface mesh");
+    gate.number("x0", "left face").unit("m").required();
+    gate.number("thickness", "thickness; 0 = tank.wall_layers dp, a full kernel support").unit("m").at_least(0).fallback(0.0);
+    gate.number("height", "height above the floor; 0 = the tank height").unit("m").at_least(0).fallback(0.0);
+    gate.number("lift_speed", "speed at which the gate rises from t = 0").unit("m/s").greater_than(0).required();
+
     TableSchema& pressure = s.table("pressure", "pressure model");
     pressure.choice("model", {"standard", "wcsph", "pcisph"},
                     "\"standard\": p = k (rho - rho0) (the thesis's standard SPH); \"wcsph\": Tait equation; "
@@ -260,6 +305,7 @@ TableSchema build() {
     s.check([](const Value& fluid, const std::string& path, Errors& errors) {
         const Value full = with_defaults(fluid);
         check_boxes_inside_tank(full, path, errors);
+        check_gate(full, path, errors);
         check_combinations(full, path, errors);
     });
     return s;
@@ -271,6 +317,9 @@ sphfsi::Value with_defaults(const sphfsi::Value& fluid) {
     Value out = fluid;
     for (const auto& f : scene_schema().fields()) {
         if (f.kind() != sphfsi::schema::Field::Kind::Table || out.find(f.name())) continue;
+        // A table with required keys (gate) has no defaults: left out, it is not there.
+        const auto& keys = f.table()->fields();
+        if (std::any_of(keys.begin(), keys.end(), [](const auto& k) { return k.is_required(); })) continue;
         Errors ignored;  // an empty table of defaults cannot be invalid
         out.as_table_mut()[f.name()] = f.table()->validate(Value(Value::Table{}), f.name(), ignored);
     }

@@ -5,6 +5,7 @@
 
 #include <omp.h>
 
+#include "sphfsi/fluid/gate.hpp"
 #include "sphfsi/fluid/schema.hpp"
 
 namespace sphfsi::fluid {
@@ -79,6 +80,25 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
     }
     sim_ = std::make_unique<Simulation2D>(settings_, build_scene(settings_), request.t0);
     coupling_.reset();
+    if (settings_.gate) {
+        // One set of solid particles per fluid: a gate's motion is prescribed, a structure's is not.
+        if (request.interface)
+            throw SolverError("bad_config", "fluid.gate: a scene with a gate cannot also couple a structure "
+                                            "(one set of solid particles per fluid); remove [fluid.gate] or the structure");
+        const Gate g = *settings_.gate;
+        const GateLift lift{g.lift_speed, g.height};
+        auto reference = gate_particles(settings_);
+        sim_->add_solids(
+            reference,
+            [reference, lift](std::size_t k, double t, Vec2& x, Vec2& v, Vec2& a) {
+                double dy = 0.0, vy = 0.0;
+                lift.at(t, dy, vy);
+                x = Vec2{{reference[k][0], reference[k][1] + dy}};
+                v = Vec2{{0.0, vy}};
+                a = Vec2{};
+            },
+            [g](const Vec2& p) { return p[0] > g.x0 && p[0] < g.x0 + g.thickness && p[1] < g.height; });
+    }
     if (request.interface) {
         check_inside_tank(*request.interface, settings_);
         try {

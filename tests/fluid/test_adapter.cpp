@@ -241,6 +241,19 @@ TEST_SUITE("adapter") {
             }
             CHECK(code == "bad_config");
         }
+        {  // A gate's solid particles and a structure's cannot share a fluid: bad_config, naming the gate.
+            SphSolver t;
+            sphfsi::protocol::InitRequest r = req;
+            r.config = with(f, {{"gate.x0", 0.45}, {"gate.lift_speed", 1.0}});
+            r.config.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, 0.4, 0.1)});
+            std::string what = "accepted";
+            try {
+                t.init(r);
+            } catch (const sphfsi::protocol::SolverError& e) {
+                what = e.code() + ": " + e.what();
+            }
+            CHECK(what.rfind("bad_config: fluid.gate", 0) == 0);
+        }
         {  // An input of the wrong shape or dtype is a bad array: bad_message (docs/protocol.md, ERROR codes).
             auto code_of = [&](sphfsi::protocol::Field displacement) {
                 sphfsi::protocol::AdvanceRequest bad;

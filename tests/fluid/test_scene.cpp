@@ -58,6 +58,12 @@ TEST_SUITE("scene") {
         CHECK(problems(with(dam_break(0.005), {{"pressure.model", "pcisph"}, {"density.method", "summation"}, {"pressure.kernel_correction", true}}))
                   .find("pressure.kernel_correction") != std::string::npos);
         CHECK(problems(with(dam_break(0.005), {{"tank.lid_velocity", vec2(1.0, 0.0)}})).find("closed_top") != std::string::npos);
+        // A gate stands beside the water, inside the tank, under an open top; it has no defaults of its own.
+        CHECK(problems(with(dam_break(0.005), {{"gate.x0", 0.05}, {"gate.lift_speed", 1.0}})).find("overlaps water[0]") != std::string::npos);
+        CHECK(problems(with(dam_break(0.005), {{"gate.x0", 0.49}, {"gate.lift_speed", 1.0}})).find("fluid.gate.x0") != std::string::npos);
+        CHECK(problems(with(dam_break(0.005), {{"gate.x0", 0.1}, {"gate.lift_speed", 1.0}, {"tank.closed_top", true}})).find("open top") != std::string::npos);
+        CHECK(problems(with(dam_break(0.005), {{"gate.x0", 0.1}})).find("fluid.gate.lift_speed") != std::string::npos);
+        CHECK(problems(with(dam_break(0.005), {{"gate.x0", 0.1}, {"gate.lift_speed", 1.0}})).empty());
         CHECK(problems(with(dam_break(0.005), {{"periodic", "x"}, {"tank.width", 0.02}})).find("3 kernel support radii") != std::string::npos);
         CHECK(problems(with(dam_break(0.005), {{"kernel", "quartic"}})).find("allowed: one of") != std::string::npos);
         CHECK(problems(with(dam_break(0.005), {{"dp", -1.0}})).find("fluid.dp") != std::string::npos);

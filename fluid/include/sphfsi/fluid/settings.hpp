@@ -2,6 +2,7 @@
 // The [fluid] section read into plain typed values (after validation), so the solver never looks keys up
 // at run time. See schema.cpp for the meaning, units and defaults of each.
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,11 @@ enum class DyeSplit { None, Vertical, Horizontal };
 
 struct Box {
     double x0 = 0, y0 = 0, width = 0, height = 0;
+};
+
+// A gate lifted from t = 0 (gate.hpp); thickness and height resolved from their scene defaults.
+struct Gate {
+    double x0 = 0, thickness = 0, height = 0, lift_speed = 0;
 };
 
 struct WaterBlock {
@@ -42,6 +48,7 @@ struct FluidSettings {
     std::array<double, 2> lid_velocity{0.0, 0.0};
     std::vector<WaterBlock> water;
     std::vector<Box> obstacles;
+    std::optional<Gate> gate;
 
     PressureModel pressure = PressureModel::Wcsph;
     double k = 1000.0, c0 = 0.0, u_max = 0.0, gamma = 7.0, background = 0.0;
