@@ -1,9 +1,9 @@
 #include "sphfsi/fluid/scene_setup.hpp"
 
-#include "sphfsi/fluid/gate.hpp"
-
 #include <algorithm>
 #include <cmath>
+
+#include "sphfsi/fluid/gate.hpp"
 
 namespace sphfsi::fluid {
 namespace {
