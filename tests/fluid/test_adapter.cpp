@@ -65,6 +65,27 @@ InterfaceMesh plate() {
     return m;
 }
 
+// The WCSPH tank plate() lies in: 0.5 m x 0.2 m, water 0.1 m deep, at spacing dp.
+Value plate_tank(double dp) {
+    Value f;
+    f.make_table();
+    f = with(f, {{"dp", dp}, {"tank.width", 0.5}, {"tank.height", 0.2}});
+    f.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, 0.5, 0.1)});
+    return wcsph(f);
+}
+
+// plate()'s window-end inputs after rising from rest at the constant acceleration that reaches vertical
+// velocity vy at the end of a window `window` long.
+Fields rising_plate(double vy, double window) {
+    const std::size_t nv = plate().vertices.rows();
+    F64Array disp = F64Array::zeros(nv, 2), vel = F64Array::zeros(nv, 2);
+    for (std::size_t v = 0; v < nv; ++v) {
+        disp(v, 1) = 0.5 * vy * window;
+        vel(v, 1) = vy;
+    }
+    return Fields{{"displacement", disp}, {"velocity", vel}};
+}
+
 }  // namespace
 
 TEST_SUITE("adapter") {
@@ -207,11 +228,7 @@ TEST_SUITE("adapter") {
 
     TEST_CASE("solid particles follow the interface; the fluid force comes back on the vertices") {
         // A plate lying in the water of a tank at rest; the structure then moves it up by 5 mm.
-        Value f;
-        f.make_table();
-        f = with(f, {{"dp", 0.0025}, {"tank.width", 0.5}, {"tank.height", 0.2}});
-        f.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, 0.5, 0.1)});
-        f = wcsph(f);
+        const Value f = plate_tank(0.0025);
         SphSolver s;
         sphfsi::protocol::InitRequest req;
         req.config = f;
@@ -332,32 +349,18 @@ TEST_SUITE("adapter") {
             for (const bool corrected : {false, true}) {
                 CAPTURE(integrator);
                 CAPTURE(corrected);
-                Value f;
-                f.make_table();
-                f = with(f, {{"dp", 0.005}, {"tank.width", 0.5}, {"tank.height", 0.2}});
-                f.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, 0.5, 0.1)});
-                f = with(wcsph(f), {{"pressure.kernel_correction", corrected}, {"time.integrator", integrator}});
                 SphSolver s;
                 sphfsi::protocol::InitRequest req;
-                req.config = f;
+                req.config = with(plate_tank(0.005), {{"pressure.kernel_correction", corrected}, {"time.integrator", integrator}});
                 req.interface = plate();
                 const double window = 3 * s.init(req).dt_wanted;
-                const std::size_t nv = 27;
-                auto kinematics = [&](double vy) {  // from rest at constant acceleration over the window
-                    F64Array disp = F64Array::zeros(nv, 2), vel = F64Array::zeros(nv, 2);
-                    for (std::size_t v = 0; v < nv; ++v) {
-                        disp(v, 1) = 0.5 * vy * window;
-                        vel(v, 1) = vy;
-                    }
-                    return Fields{{"displacement", disp}, {"velocity", vel}};
-                };
-                step(s, window, 3, kinematics(0.0));
+                step(s, window, 3, rising_plate(0.0, window));
                 s.save();
-                const auto shortcut = step(s, window, 3, kinematics(0.01));
+                const auto shortcut = step(s, window, 3, rising_plate(0.01, window));
                 const Fields after_shortcut = s.snapshot();
                 s.restore();
                 s.simulation().discard_rates();
-                const auto afresh = step(s, window, 3, kinematics(0.01));
+                const auto afresh = step(s, window, 3, rising_plate(0.01, window));
                 CHECK(std::get<F64Array>(shortcut.outputs.at("force")) == std::get<F64Array>(afresh.outputs.at("force")));
                 CHECK(s.snapshot() == after_shortcut);
             }
@@ -370,25 +373,13 @@ TEST_SUITE("adapter") {
         // evaluated with the previous window's a_w, so an implicit coupling could not see the added mass.
         for (const std::string integrator : {"symplectic_euler", "velocity_verlet", "predictor_corrector"}) {
             CAPTURE(integrator);
-            Value f;
-            f.make_table();
-            f = with(f, {{"dp", 0.005}, {"tank.width", 0.5}, {"tank.height", 0.2}});
-            f.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, 0.5, 0.1)});
-            f = with(wcsph(f), {{"time.integrator", integrator}});
             SphSolver s;
             sphfsi::protocol::InitRequest req;
-            req.config = f;
+            req.config = with(plate_tank(0.005), {{"time.integrator", integrator}});
             req.interface = plate();
             const double dt = s.init(req).dt_wanted;
             const std::size_t nv = 27;
-            auto kinematics = [&](double vy) {
-                F64Array disp = F64Array::zeros(nv, 2), vel = F64Array::zeros(nv, 2);
-                for (std::size_t v = 0; v < nv; ++v) {
-                    disp(v, 1) = 0.5 * vy * dt;  // from rest at constant acceleration
-                    vel(v, 1) = vy;
-                }
-                return Fields{{"displacement", disp}, {"velocity", vel}};
-            };
+            auto kinematics = [&](double vy) { return rising_plate(vy, dt); };
             auto lift = [&](const sphfsi::protocol::AdvanceReply& r) {
                 const auto& F = std::get<F64Array>(r.outputs.at("force"));
                 double fy = 0.0;
