@@ -21,6 +21,9 @@ double num(const Value& t, std::string_view k) { return t.at(k).as_double(); }
 // Small slack so that a block written as 0.1 m wide in a 0.1 m tank is not rejected by rounding.
 constexpr double slack = 1e-9;
 
+// Whether [a0, a1] and [b0, b1] share more than the slack (touching is not overlapping).
+bool spans_overlap(double a0, double a1, double b0, double b1) { return a0 < b1 - slack && b0 < a1 - slack; }
+
 void check_boxes_inside_tank(const Value& fluid, const std::string& path, Errors& errors) {
     const Value& tank = fluid.at("tank");
     const double W = num(tank, "width"), H = num(tank, "height"), dp = num(fluid, "dp");
@@ -47,9 +50,8 @@ void check_boxes_inside_tank(const Value& fluid, const std::string& path, Errors
     for (const Value& b : water->as_array()) {
         std::size_t j = 0;
         for (const Value& o : obstacles->as_array()) {
-            const bool overlap_x = num(b, "x0") < num(o, "x0") + num(o, "width") - slack && num(o, "x0") < num(b, "x0") + num(b, "width") - slack;
-            const bool overlap_y = num(b, "y0") < num(o, "y0") + num(o, "height") - slack && num(o, "y0") < num(b, "y0") + num(b, "height") - slack;
-            if (overlap_x && overlap_y)
+            if (spans_overlap(num(b, "x0"), num(b, "x0") + num(b, "width"), num(o, "x0"), num(o, "x0") + num(o, "width")) &&
+                spans_overlap(num(b, "y0"), num(b, "y0") + num(b, "height"), num(o, "y0"), num(o, "y0") + num(o, "height")))
                 errors.add(&b, "key '" + key(path, "water[" + std::to_string(i) + "]") + "': overlaps obstacle[" +
                                    std::to_string(j) + "]; water and static walls must not share space");
             ++j;
@@ -83,9 +85,8 @@ void check_gate(const Value& fluid, const std::string& path, Errors& errors) {
         if (!boxes) continue;
         std::size_t i = 0;
         for (const Value& b : boxes->as_array()) {
-            const bool overlap_x = num(b, "x0") < x0 + t - slack && x0 < num(b, "x0") + num(b, "width") - slack;
-            const bool overlap_y = num(b, "y0") < h - slack;
-            if (overlap_x && overlap_y)
+            if (spans_overlap(num(b, "x0"), num(b, "x0") + num(b, "width"), x0, x0 + t) &&
+                spans_overlap(num(b, "y0"), num(b, "y0") + num(b, "height"), 0.0, h))
                 errors.add(gate, "key '" + key(path, "gate") + "': overlaps " + list + "[" + std::to_string(i) + "]");
             ++i;
         }

@@ -387,37 +387,31 @@ void Simulation2D::refresh_solid_rates() {
         extrapolate_boundary_state(P, grid_, kw, rates_.gravity, s_.clamp_negative,
                                    [&](double p) { return boundary_density(p); },
                                    [&](std::uint32_t w) { return boundary_acceleration(w); }, true);
-        // Mark the solids and their fluid neighbours (a hair beyond the support: marking one too many costs
-        // nothing, it is recomputed to the same value).
+        // Marks with `ring` each unmarked fluid particle within the support of a particle `source(i)` picks
+        // (a hair beyond the support: marking one too many costs nothing, it is recomputed to the same value).
         const double R2 = grid_.radius2() * (1.0 + 1e-9);
-        grid_.for_each_cell([&](std::uint32_t cell, std::uint32_t begin, std::uint32_t end) {
-            typename CellGrid<Dim>::Range ranges[CellGrid<Dim>::max_ranges];
-            int nr = -1;
-            for (std::uint32_t w = begin; w < end; ++w) {
-                if (P.kind[w] != Kind::Solid) continue;
-                near_solid_[w] = 1;
-                if (nr < 0) nr = grid_.ranges(cell, ranges);
-                for (int r = 0; r < nr; ++r)
-                    for (std::uint32_t f = ranges[r].begin; f < ranges[r].end; ++f)
-                        if (P.kind[f] == Kind::Fluid && norm2(P.x[w] - (P.x[f] + ranges[r].shift)) < R2) near_solid_[f] = 1;
-            }
-        });
-        if (s_.kernel_correction) {
-            // The solids' new densities change the matrices L of their fluid neighbours, and the pair terms
-            // (L_i + L_j)/2 of those neighbours' own neighbours with them: mark that second ring too.
+        auto mark_fluid_neighbours = [&](const auto& source, std::uint8_t ring) {
             grid_.for_each_cell([&](std::uint32_t cell, std::uint32_t begin, std::uint32_t end) {
                 typename CellGrid<Dim>::Range ranges[CellGrid<Dim>::max_ranges];
                 int nr = -1;
                 for (std::uint32_t i = begin; i < end; ++i) {
-                    if (near_solid_[i] != 1 || P.kind[i] != Kind::Fluid) continue;
+                    if (!source(i)) continue;
                     if (nr < 0) nr = grid_.ranges(cell, ranges);
                     for (int r = 0; r < nr; ++r)
                         for (std::uint32_t f = ranges[r].begin; f < ranges[r].end; ++f)
-                            if (P.kind[f] == Kind::Fluid && !near_solid_[f] &&
-                                norm2(P.x[i] - (P.x[f] + ranges[r].shift)) < R2)
-                                near_solid_[f] = 2;
+                            if (P.kind[f] == Kind::Fluid && !near_solid_[f] && norm2(P.x[i] - (P.x[f] + ranges[r].shift)) < R2)
+                                near_solid_[f] = ring;
                 }
             });
+        };
+        // The solids and their fluid neighbours.
+        for (std::size_t i = 0; i < n; ++i)
+            if (P.kind[i] == Kind::Solid) near_solid_[i] = 1;
+        mark_fluid_neighbours([&](std::uint32_t i) { return P.kind[i] == Kind::Solid; }, 1);
+        if (s_.kernel_correction) {
+            // The solids' new densities change the matrices L of their fluid neighbours, and the pair terms
+            // (L_i + L_j)/2 of those neighbours' own neighbours with them: mark that second ring too.
+            mark_fluid_neighbours([&](std::uint32_t i) { return near_solid_[i] == 1 && P.kind[i] == Kind::Fluid; }, 2);
             update_correction(kg);
         }
         // The factors of all particles: the buffer is scratch (the sort reuses it), not state.

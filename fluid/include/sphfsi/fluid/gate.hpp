@@ -15,7 +15,6 @@
 //
 // The gate's particles are solid particles like those of a coupled structure (Adami wall pressure with the
 // gate's own velocity; no-slip as for the walls), driven by this prescribed motion instead of a structure.
-#include <cstddef>
 #include <vector>
 
 #include "sphfsi/fluid/settings.hpp"
@@ -26,7 +25,8 @@ namespace sphfsi::fluid {
 // Particle centres of the gate at t = 0 on the dp lattice of its box [x0, x0 + thickness] x [0, height].
 std::vector<Vec<2>> gate_particles(const FluidSettings& s);
 
-// The gate's rise at time t (t0 = 0): offset, velocity and acceleration along +y.
+// The gate's rise at time t (t0 = 0): offset and velocity along +y (no acceleration: it starts and stops at
+// once, moving along its own faces).
 struct GateLift {
     double speed = 0.0, travel = 0.0;
     void at(double t, double& offset, double& velocity) const {
