@@ -262,27 +262,27 @@ void Simulation2D::evaluate() {
             summation_density(P, grid_, kw, mass_, dummy, volumes, P.rho);
         }
         // Pressures of fluid particles and (dummy model) boundary particles from the equation of state.
+        // PCISPH's pressures come from its solve in the step; P.p keeps those of the last step taken (zero
+        // before the first), which is what the record shows, and fill_rate_factors leaves them out of
+        // these rates, which are PCISPH's non-pressure accelerations.
         const bool tait = s_.pressure == PressureModel::Wcsph;
 #pragma omp parallel for schedule(static)
         for (long long q = 0; q < nn; ++q) {
             const std::size_t i = static_cast<std::size_t>(q);
             const bool fluid = P.kind[i] == Kind::Fluid;
             if (!fluid && !(dummy && is_boundary(P.kind[i]))) continue;  // Adami: extrapolated below
-            double p = pcisph ? 0.0 : tait ? tait_.pressure(P.rho[i]) : standard_.pressure(P.rho[i]);
-            // A boundary particle never pulls fluid onto the wall; fluid may be clamped by choice.
-            if (!fluid || s_.clamp_negative) p = std::max(p, 0.0);
-            P.p[i] = p;
+            if (!pcisph) {
+                double p = tait ? tait_.pressure(P.rho[i]) : standard_.pressure(P.rho[i]);
+                // A boundary particle never pulls fluid onto the wall; fluid may be clamped by choice.
+                if (!fluid || s_.clamp_negative) p = std::max(p, 0.0);
+                P.p[i] = p;
+            }
             if (!fluid) P.v_visc[i] = P.v[i];
         }
-        if (!dummy) {
+        if (!dummy)
             extrapolate_boundary_state(P, grid_, kw, rates_.gravity, s_.clamp_negative,
                                        [&](double p) { return boundary_density(p); },
                                        [&](std::uint32_t w) { return boundary_acceleration(w); });
-            if (pcisph) {
-#pragma omp parallel for schedule(static)
-                for (long long q = 0; q < nn; ++q) P.p[static_cast<std::size_t>(q)] = 0.0;
-            }
-        }
         KinematicFloor floor;
         if (kinematic_floor_) {
             rho_scratch_.resize(n);
@@ -310,10 +310,11 @@ const RateFactors* Simulation2D::fill_rate_factors() {
     const long long nn = static_cast<long long>(n);
     if (scratch_.size() < n * sizeof(RateFactors)) scratch_.resize(n * sizeof(RateFactors));
     RateFactors* factors = reinterpret_cast<RateFactors*>(scratch_.data());
+    const bool pcisph = s_.pressure == PressureModel::Pcisph;  // its pressure force comes from its solve
 #pragma omp parallel for schedule(static)
     for (long long q = 0; q < nn; ++q) {
         const std::size_t i = static_cast<std::size_t>(q);
-        factors[i] = RateFactors{P.p[i] / (P.rho[i] * P.rho[i]), 1.0 / P.rho[i]};
+        factors[i] = RateFactors{pcisph ? 0.0 : P.p[i] / (P.rho[i] * P.rho[i]), 1.0 / P.rho[i]};
     }
     return factors;
 }
