@@ -505,7 +505,8 @@ def surge_front(run_dir, params, context):
         mean_rel = mean |Z_sim - Z_exp| / Z_exp,  max_rel = max |Z_sim - Z_exp| / Z_exp
     Reference: Martin, J. C. & Moyce, W. J. (1952), Phil. Trans. R. Soc. A 244, 312-324, tables 2 and 6,
     n^2 = 2 (reference_csv: columns T,Z after '#' lines, e.g. tests/fluid/data/martin_moyce_1952_front_n2_2.csv).
-    The experiment's gate was lifted in finite time, so simulations lead it by 10-20 % for 0.8 < T < 2.3.
+    Simulations released at once lead it by 10-20 % for 0.8 < T < 2.3, commonly put down to its gate; a
+    modelled gate does not reproduce that (docs/validation.md, "Dam break").
     """
     Tref, Zref = read_reference_curve(context.resolve(params["reference_csv"]) if context
                                       else params["reference_csv"])

@@ -10,8 +10,7 @@
 // Lifted at any constant speed from 0.5 to 8 m/s, this gate does not delay the front: water jets out under
 // it and leads the experiment further at T <= 1.2 (docs/validation.md, "Dam break").
 // Known and not understood: the jet's speed under a gate rising at 2 m/s is 0.8 m/s with WCSPH, 1.8 m/s with
-// standard SPH and 3.4 m/s with PCISPH (Torricelli: 2 m/s), and PCISPH threw a particle off the gate's corner
-// that later diverged. The gate is an option no scene turns on.
+// standard SPH and 0.8 - 1.4 m/s with PCISPH (Torricelli: 2 m/s). The gate is an option no scene turns on.
 //
 // The gate's particles are solid particles like those of a coupled structure (Adami wall pressure with the
 // gate's own velocity; no-slip as for the walls), driven by this prescribed motion instead of a structure.
