@@ -752,7 +752,7 @@ WindowStats Simulation2D::advance(double t_end, std::uint32_t substeps, const st
             const double remaining = t_end - st_.t;
             const double steps_left = std::max(1.0, std::ceil(remaining / stable_dt() * (1.0 - 1e-12)));
             const bool last = steps_left == 1.0;
-            const double dt = last ? remaining : remaining / steps_left;
+            const double dt = remaining / steps_left;  // exactly `remaining` when last
             const double taken = take_step(dt, true, ws);
             if (last && taken == dt) st_.t = t_end;
             record(taken);

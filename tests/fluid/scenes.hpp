@@ -36,6 +36,16 @@ inline Value block(double x0, double y0, double w, double h, int tag = 0, const 
 
 inline Value vec2(double a, double b) { return Value(Value::Array{Value(a), Value(b)}); }
 
+// A tank `width` x `height` at spacing dp holding one undyed block of water `water_width` x `water_height`
+// in its lower left corner; everything else at the scene defaults.
+inline Value water_tank(double dp, double width, double height, double water_width, double water_height) {
+    Value f;
+    f.make_table();
+    f = with(f, {{"dp", dp}, {"tank.width", width}, {"tank.height", height}});
+    f.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, water_width, water_height)});
+    return f;
+}
+
 // The thesis's dam break: a column 0.1 m wide and 0.2 m high against the left wall of a tank, dyed in
 // two halves. Martin & Moyce's (1952) n^2 = 2 column has the same aspect ratio.
 inline Value dam_break(double dp) {

@@ -66,13 +66,7 @@ InterfaceMesh plate() {
 }
 
 // The WCSPH tank plate() lies in: 0.5 m x 0.2 m, water 0.1 m deep, at spacing dp.
-Value plate_tank(double dp) {
-    Value f;
-    f.make_table();
-    f = with(f, {{"dp", dp}, {"tank.width", 0.5}, {"tank.height", 0.2}});
-    f.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, 0.5, 0.1)});
-    return wcsph(f);
-}
+Value plate_tank(double dp) { return wcsph(water_tank(dp, 0.5, 0.2, 0.5, 0.1)); }
 
 // plate()'s window-end inputs after rising from rest at the constant acceleration that reaches vertical
 // velocity vy at the end of a window `window` long.

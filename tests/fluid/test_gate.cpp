@@ -16,11 +16,7 @@ namespace {
 
 // A column 0.1 m wide and H high against the left wall, held at x = 0.1 m by a gate rising at `speed`.
 Value gated_column(double dp, double H, double speed) {
-    Value f;
-    f.make_table();
-    f = with(f, {{"dp", dp}, {"tank.width", 0.4}, {"tank.height", 1.5 * H}, {"gate.x0", 0.1}, {"gate.lift_speed", speed}});
-    f.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, 0.1, H)});
-    return wcsph(f);
+    return wcsph(with(water_tank(dp, 0.4, 1.5 * H, 0.1, H), {{"gate.x0", 0.1}, {"gate.lift_speed", speed}}));
 }
 
 }  // namespace

@@ -20,23 +20,10 @@ using sphfsi::fluid::Kind;
 using sphfsi::protocol::F64Array;
 using sphfsi::protocol::I32Array;
 
-namespace {
-
-// A 0.1 m x 0.1 m column of water filling a tank of the same width.
-Value still_tank(double H, double dp) {
-    Value f;
-    f.make_table();
-    f = with(f, {{"dp", dp}, {"tank.width", 0.1}, {"tank.height", 0.12}});
-    f.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, 0.1, H)});
-    return f;
-}
-
-}  // namespace
-
 TEST_SUITE("hydrostatic") {
     TEST_CASE("hydrostatic tank at rest") {
         const double H = 0.1, dp = H / 40, g = 9.81, rho0 = 1000.0;
-        auto solver = start(wcsph(still_tank(H, dp)));
+        auto solver = start(wcsph(water_tank(dp, 0.1, 0.12, 0.1, H)));
         std::size_t crossings = 0;
         run(*solver, 1.5, 0.05, [&](const auto&) { crossings += solver->simulation().wall_crossings().count; });
         const auto& P = solver->simulation().particles();
@@ -80,7 +67,7 @@ TEST_SUITE("hydrostatic") {
     // within the 2 %.
     TEST_CASE("PCISPH: the recorded pressure of a tank at rest") {
         const double H = 0.1, dp = H / 40, g = 9.81, rho0 = 1000.0;
-        auto solver = start(pcisph(still_tank(H, dp)));
+        auto solver = start(pcisph(water_tank(dp, 0.1, 0.12, 0.1, H)));
         double ratio_sum = 0.0, ratio_min = 1e9, ratio_max = 0.0, v_max = 0.0;
         int frames = 0;
         run(*solver, 1.0, 0.01, [&](const auto&) {

@@ -117,10 +117,7 @@ TEST_SUITE("scene") {
         // m W(0) = 0.246 rho0 at h = 1.5 dp). Without the kinematic density floor (Simulation2D's constructor) the
         // spray here sank to 0.186 rho0 by t = 0.5 s and about 0.13 rho0 by t = 1 s, and in the coupled scene at
         // dp = 2 mm a particle reached 0.009 rho0 and stopped the run at t = 0.65 s (min_density_ratio).
-        Value f;
-        f.make_table();
-        f = with(f, {{"dp", 0.004}, {"tank.width", 0.584}, {"tank.height", 0.584}});
-        f.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, 0.146, 0.292)});
+        Value f = water_tank(0.004, 0.584, 0.584, 0.146, 0.292);
         f.as_table_mut()["obstacle"] = Value(Value::Array{box(0.286, 0.0, 0.012, 0.08)});
         f.as_table_mut()["boundary"] = Value(Value::Table{{"repulsive", Value(true)}});  // as the scene sets it
         auto s = start(f);
