@@ -66,9 +66,7 @@ void check_gate(const Value& fluid, const std::string& path, Errors& errors) {
     if (!gate) return;
     const Value& tank = fluid.at("tank");
     const double W = num(tank, "width"), H = num(tank, "height"), dp = num(fluid, "dp");
-    const double x0 = num(*gate, "x0");
-    const double t = num(*gate, "thickness") > 0 ? num(*gate, "thickness") : static_cast<double>(tank.at("wall_layers").as_int()) * dp;
-    const double h = num(*gate, "height") > 0 ? num(*gate, "height") : H;
+    const auto [x0, t, h] = gate_box(fluid);
     if (x0 < -slack || x0 + t > W + slack)
         errors.add(gate, "key '" + key(path, "gate.x0") + "': the gate [" + std::to_string(x0) + ", " + std::to_string(x0 + t) +
                              "] m does not lie inside the tank [0, " + std::to_string(W) + "] m");
@@ -333,6 +331,15 @@ sphfsi::Value validate_scene(const sphfsi::Value& fluid, const std::string& sour
     Value checked = scene_schema().validate(fluid, "fluid", errors);
     sphfsi::schema::throw_if_any(errors, source);
     return with_defaults(checked);
+}
+
+GateBox gate_box(const Value& fluid) {
+    const Value& gate = fluid.at("gate");
+    const Value& tank = fluid.at("tank");
+    const double thickness = num(gate, "thickness"), height = num(gate, "height");
+    return GateBox{num(gate, "x0"),
+                   thickness > 0 ? thickness : static_cast<double>(tank.at("wall_layers").as_int()) * num(fluid, "dp"),
+                   height > 0 ? height : num(tank, "height")};
 }
 
 const sphfsi::schema::TableSchema& scene_schema() {

@@ -63,9 +63,8 @@ FluidSettings read_settings(const sphfsi::Value& raw) {
     if (const auto* obstacles = f.find("obstacle"))
         for (const auto& b : obstacles->as_array()) s.obstacles.push_back(read_box(b));
     if (const auto* gate = f.find("gate")) {
-        const double thickness = gate->at("thickness").as_double(), height = gate->at("height").as_double();
-        s.gate = Gate{gate->at("x0").as_double(), thickness > 0 ? thickness : s.wall_layers * s.dp,
-                      height > 0 ? height : s.tank_height, gate->at("lift_speed").as_double()};
+        const GateBox box = gate_box(f);
+        s.gate = Gate{box.x0, box.thickness, box.height, gate->at("lift_speed").as_double()};
     }
 
     const auto& p = f.at("pressure");

@@ -12,6 +12,14 @@ const sphfsi::schema::TableSchema& scene_schema();
 // with defaults when the scene left it out (the schema itself only fills keys of tables that are present).
 sphfsi::Value with_defaults(const sphfsi::Value& validated_fluid);
 
+// The [fluid.gate] box of a section that has one, its defaults resolved: thickness 0 = tank.wall_layers dp
+// (a full kernel support), height 0 = the tank's height. The schema's checks and read_settings both use it,
+// so the two cannot disagree about where the gate stands.
+struct GateBox {
+    double x0 = 0, thickness = 0, height = 0;
+};
+GateBox gate_box(const sphfsi::Value& fluid);
+
 // Validates a raw [fluid] section and returns it complete; throws ConfigError listing every problem.
 sphfsi::Value validate_scene(const sphfsi::Value& fluid, const std::string& source = "scene");
 
