@@ -43,22 +43,15 @@ namespace {
 constexpr double pi = std::numbers::pi;
 
 Value channel(double L, double dp, double width) {
-    Value f;
-    f.make_table();
-    f = with(f, {{"dp", dp},
-                 {"periodic", "x"},
-                 {"tank.width", width},
-                 {"tank.height", L},
-                 {"tank.closed_top", true},
-                 {"pressure.model", "wcsph"},
-                 {"pressure.c0", 0.05},
-                 {"pressure.clamp_negative", false},
-                 {"density.method", "continuity"},
-                 {"viscosity.model", "morris"},
-                 {"viscosity.nu", 1e-6},
-                 {"boundary.model", "adami"}});
-    f.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, width, L)});
-    return f;
+    return with(water_tank(dp, width, L, width, L), {{"periodic", "x"},
+                                                     {"tank.closed_top", true},
+                                                     {"pressure.model", "wcsph"},
+                                                     {"pressure.c0", 0.05},
+                                                     {"pressure.clamp_negative", false},
+                                                     {"density.method", "continuity"},
+                                                     {"viscosity.model", "morris"},
+                                                     {"viscosity.nu", 1e-6},
+                                                     {"boundary.model", "adami"}});
 }
 
 // Relative L2 error of the fluid's x-velocity against u(y).

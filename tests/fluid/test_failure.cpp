@@ -96,11 +96,8 @@ TEST_SUITE("failure") {
         // with its centre at about the top surface and drops as it rounds the outer corner; before the fix the
         // first such particle stopped the run as "lost through the wall" (a wind-driven basin filled to the brim
         // did so at t = 2.5 s). Conservation: every particle is still fluid or has escaped.
-        Value f;
-        f.make_table();
-        f = with(f, {{"dp", 0.0025}, {"tank.width", 0.1}, {"tank.height", 0.05}, {"threads", 1}});
+        Value f = with(water_tank(0.0025, 0.1, 0.05, 0.1, 0.05), {{"threads", 1}});
         f.as_table_mut()["gravity"] = vec2(9.81 * std::sin(0.2), -9.81 * std::cos(0.2));
-        f.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, 0.1, 0.05)});
         auto s = start(wcsph(f));
         const std::size_t n = s->simulation().fluid_count();
         run(*s, 0.5, 0.01);
@@ -115,13 +112,10 @@ TEST_SUITE("failure") {
     TEST_CASE("a particle forced through a wall stops the run, naming it") {
         // Gravity of 200 g towards the right wall of a closed tank, with a soft equation of state (c0 = 5 m/s):
         // the wall's pressure cannot hold the water, which is pushed into and through the wall layers.
-        Value f;
-        f.make_table();
-        f = with(f, {{"dp", 0.0025}, {"tank.width", 0.1}, {"tank.height", 0.05}, {"tank.closed_top", true},
-                     {"threads", 1}, {"pressure.c0", 5.0}, {"failure.max_density_ratio", 100.0},
-                     {"failure.max_mach", 1000.0}});
+        Value f = with(water_tank(0.0025, 0.1, 0.05, 0.05, 0.05),
+                       {{"tank.closed_top", true}, {"threads", 1}, {"pressure.c0", 5.0},
+                        {"failure.max_density_ratio", 100.0}, {"failure.max_mach", 1000.0}});
         f.as_table_mut()["gravity"] = vec2(200 * 9.81, 0.0);
-        f.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, 0.05, 0.05)});
         const std::string msg = diverge(wcsph(f), 0.001, 0);
         MESSAGE(msg);
         CHECK(msg.find("lost through the wall") != std::string::npos);

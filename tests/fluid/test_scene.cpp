@@ -140,10 +140,7 @@ TEST_SUITE("scene") {
     }
 
     TEST_CASE("a closed box periodic in x keeps water at rest") {
-        Value f;
-        f.make_table();
-        f = with(f, {{"dp", 0.005}, {"periodic", "x"}, {"tank.width", 0.1}, {"tank.height", 0.1}, {"tank.closed_top", true}});
-        f.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, 0.1, 0.06)});
+        const Value f = with(water_tank(0.005, 0.1, 0.1, 0.1, 0.06), {{"periodic", "x"}, {"tank.closed_top", true}});
         auto s = start(wcsph(f));
         run(*s, 0.3, 0.05);
         CHECK(s->simulation().wall_crossings().count == 0);
