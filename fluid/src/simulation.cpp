@@ -76,6 +76,22 @@ Simulation2D::Simulation2D(const FluidSettings& settings, Scene2D scene, double 
         }
     }
 
+    // Kernel sums of density (summation, Shepard's volumes, PCISPH's prediction, the kinematic floor) weigh
+    // each neighbour with m_sum = rho0 / sum_j W_ij over the initial lattice instead of the particle mass
+    // m = rho0 dp^Dim. On a lattice the sum of dp^Dim W_ij is not 1 but a quadrature of the kernel's
+    // integral: 1.0051 for the default Wendland kernel at h = 1.5 dp, 1.0034 for the cubic spline (1.0012
+    // and 1.0000 at h = 2 dp). With m, water resting on its initial lattice summed to 1.005 rho0, which the
+    // equation of state read as compression: standard SPH at the thesis's k = 1000 m^2/s^2 started every
+    // scene with 5.1 kPa in its bulk (the dam-break column's bottom pressure is 2.0 kPa), WCSPH on summed
+    // densities with 2.0 kPa, and PCISPH with half of its eta = 1 % spent (eta = 0.1 % could not be met at
+    // all). Measured effects: docs/validation.md, "Summed densities on the initial lattice". Forces, energies
+    // and the continuity equation keep m, so the water weighs what its volume does.
+    summation_mass_ = s_.rho0 / with_kernels<Dim>(s_.kernel, h_, [&](const auto& kw, const auto&) {
+        double sum = kw.w(0.0);
+        for_each_lattice_neighbour<Dim>(s_.dp, support_, [&](const V&, double r) { sum += kw.w(r); });
+        return sum;
+    });
+
     const double eta2 = 0.01 * h_ * h_;
     rates_.mass = mass_;
     rates_.visc = ViscosityParams{s_.viscosity, s_.alpha, c0_, s_.nu, h_, eta2, 0.001 * h_ * h_};
@@ -89,22 +105,15 @@ Simulation2D::Simulation2D(const FluidSettings& settings, Scene2D scene, double 
     // splashes the first-order integration loses that tracking: in elastic_obstacle.toml at dp = 2 mm the
     // returning wave flows at 0.4 to 0.9 rho0 with full neighbourhoods, and a particle thrown off the
     // cantilever then fell to 0.009 rho0 ("diverged" at t = 0.65 s). So at each evaluation the density is
-    // raised to the kinematic density (the kernel sum normalised by its value on the initial lattice), but
+    // raised to the kinematic density (the kernel sum with m_sum, rho0 on the initial lattice), but
     // never above rho(p = 0): a particle can be as rarefied as its positions say, not more. This cannot create
     // pressure (compressed states are untouched) and leaves free-surface particles alone (their kernel sum is
     // truncated, below their density); a lone particle keeps at least m W(0), about a quarter of rho0.
     // The rate pass takes the kernel sums and the density is raised after it (interaction.hpp: below
     // rho(p = 0) the pressure is zero either way, so the pass sees the pressures a prior raise would give).
     kinematic_floor_ = continuity_ && s_.clamp_negative && s_.pressure != PressureModel::Pcisph;
-    if (kinematic_floor_) {
+    if (kinematic_floor_)
         kinematic_cap_ = s_.pressure == PressureModel::Wcsph ? tait_.density(0.0) : standard_.density(0.0);
-        const double lattice_sum = with_kernels<Dim>(s_.kernel, h_, [&](const auto& kw, const auto&) {
-            double sum = kw.w(0.0);
-            for_each_lattice_neighbour<Dim>(s_.dp, support_, [&](const V&, double r) { sum += kw.w(r); });
-            return mass_ * sum;
-        });
-        kinematic_norm_ = s_.rho0 / lattice_sum;
-    }
     rates_.continuity = continuity_ && s_.integrator == Integrator::PredictorCorrector;
     rates_.wall_continuity = rates_.continuity && s_.wall == WallModel::Dummy;
     rates_.diffusion.model = s_.diffusion;
@@ -128,6 +137,7 @@ Simulation2D::Simulation2D(const FluidSettings& settings, Scene2D scene, double 
     surface_ = make_surface_stress<Dim>(V{{s_.wind_shear[0], s_.wind_shear[1]}}, s_.surface_threshold, h_, s_.dp);
 
     pcisph_.mass = mass_;
+    pcisph_.summation_mass = summation_mass_;
     pcisph_.rho0 = s_.rho0;
     pcisph_.eta = s_.eta;
     pcisph_.min_iterations = s_.min_iterations;
@@ -135,7 +145,7 @@ Simulation2D::Simulation2D(const FluidSettings& settings, Scene2D scene, double 
     pcisph_.clamp_negative = s_.clamp_negative;
     pcisph_.dummy_boundaries = s_.wall == WallModel::Dummy;
     pcisph_.delta_dt2 = with_kernels<Dim>(s_.kernel, h_, [&](const auto&, const auto& kg) {
-        return pcisph_delta_dt2<Dim>(kg, s_.dp, mass_, s_.rho0);
+        return pcisph_delta_dt2<Dim>(kg, s_.dp, mass_, summation_mass_, s_.rho0);
     });
 
     limits_ = StepLimits{s_.cfl, s_.force_factor, s_.viscous_factor, s_.dt_max};
@@ -256,10 +266,10 @@ void Simulation2D::evaluate() {
             // Written in place: a particle's sum reads no density but its own (a boundary particle keeps it).
             const std::vector<double>* volumes = nullptr;
             if (s_.density == DensityMethod::Shepard) {
-                summation_density(P, grid_, kw, mass_, true, nullptr, rho_scratch_);  // plain sums: the volumes
+                summation_density(P, grid_, kw, summation_mass_, true, nullptr, rho_scratch_);  // plain sums: the volumes
                 volumes = &rho_scratch_;
             }
-            summation_density(P, grid_, kw, mass_, dummy, volumes, P.rho);
+            summation_density(P, grid_, kw, summation_mass_, dummy, volumes, P.rho);
         }
         // Pressures of fluid particles and (dummy model) boundary particles from the equation of state.
         // PCISPH's pressures come from its solve in the step; P.p keeps those of the last step taken (zero
@@ -286,7 +296,7 @@ void Simulation2D::evaluate() {
         KinematicFloor floor;
         if (kinematic_floor_) {
             rho_scratch_.resize(n);
-            floor = KinematicFloor{kinematic_cap_, mass_ * kinematic_norm_, rho_scratch_.data()};
+            floor = KinematicFloor{kinematic_cap_, summation_mass_, rho_scratch_.data()};
         }
         update_correction(kg);
         compute_rates(P, grid_, kw, kg, ViscosityKernel<Dim>(h_), fill_rate_factors(), rates_,

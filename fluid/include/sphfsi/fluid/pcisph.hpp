@@ -3,7 +3,7 @@
 // pressures are found iteratively: predict velocities and positions with the current pressure force,
 // predict densities by summation at the predicted positions, and raise each particle's pressure by
 // delta * (rho* - rho0) with the precomputed stiffness
-//   delta = rho0^2 / (2 dt^2 m^2 sum_j |grad W_ij|^2)      (filled prototype neighbourhood on the dp lattice),
+//   delta = rho0^2 / (2 dt^2 m m_sum sum_j |grad W_ij|^2)  (filled prototype neighbourhood on the dp lattice),
 // until the largest predicted density error is below eta * rho0 after at least `min_iterations` corrections.
 // The pressure force is a_i = -sum_j m (p_i + p_j) / rho0^2 grad W_ij at the positions of time t (the form
 // the stiffness delta is derived for). Neighbour lists are those of time t: predicted positions move a
@@ -24,6 +24,7 @@ namespace sphfsi::fluid {
 template <int Dim>
 struct PcisphParams {
     double mass = 0.0, rho0 = 1000.0, eta = 0.01;
+    double summation_mass = 0.0;  // the mass in the predicted densities' kernel sums (Simulation2D says why)
     int min_iterations = 3, max_iterations = 50;
     bool clamp_negative = true;   // free surface: only compression is corrected, pressures stay >= 0
     bool dummy_boundaries = false;  // dummy walls are corrected like fluid; otherwise Adami extrapolation
@@ -44,9 +45,10 @@ struct PcisphOutcome {
     bool converged = false;
 };
 
-// Stiffness factor delta * dt^2 from a prototype fluid particle with a full lattice neighbourhood.
+// Stiffness factor delta * dt^2 from a prototype fluid particle with a full lattice neighbourhood: the
+// pressure force carries the particle mass m, the predicted density the summation mass m_sum.
 template <int Dim, class KernelG>
-double pcisph_delta_dt2(const KernelG& kg, double dp, double mass, double rho0) {
+double pcisph_delta_dt2(const KernelG& kg, double dp, double mass, double summation_mass, double rho0) {
     double sum_grad2 = 0.0;
     Vec<Dim> sum_grad{};
     for_each_lattice_neighbour<Dim>(dp, kg.support(), [&](const Vec<Dim>& dx, double r) {
@@ -54,7 +56,7 @@ double pcisph_delta_dt2(const KernelG& kg, double dp, double mass, double rho0) 
         sum_grad += g;
         sum_grad2 += norm2(g);
     });
-    const double beta = 2.0 * mass * mass / (rho0 * rho0);  // times dt^2
+    const double beta = 2.0 * mass * summation_mass / (rho0 * rho0);  // times dt^2
     return -1.0 / (beta * (-norm2(sum_grad) - sum_grad2));
 }
 
@@ -100,7 +102,7 @@ PcisphOutcome pcisph_solve(ParticleStore<Dim>& P, const CellGrid<Dim>& grid, con
                         const double r2 = norm2(xi - (s.x_pred[j] + ranges[r].shift));
                         if (r2 < R2 && j != i) sum += kw.w(std::sqrt(r2));
                     }
-                s.rho_pred[i] = m * sum;
+                s.rho_pred[i] = prm.summation_mass * sum;
                 if (fluid) {
                     const double e = s.rho_pred[i] - prm.rho0;
                     local_max = std::max(local_max, prm.clamp_negative ? e : std::abs(e));

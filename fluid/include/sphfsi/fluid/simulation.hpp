@@ -146,6 +146,9 @@ private:
     std::int32_t first_solid_id_ = 0;
     WallGeometry geometry_;
     double h_, support_, mass_, c0_;
+    // The mass in kernel sums of density: rho0 over the kernel sum of a full neighbourhood on the initial
+    // lattice, so that sum m_sum W_ij is exactly rho0 there (the constructor says why).
+    double summation_mass_ = 0.0;
     TaitEos tait_;
     StandardEos standard_;
     RateParams<Dim> rates_;
@@ -153,7 +156,7 @@ private:
     bool continuity_ = false;  // densities integrated (else summed)
     // Integrated densities are kept at or above min(rho(p = 0), kinematic density); see the constructor.
     bool kinematic_floor_ = false;
-    double kinematic_norm_ = 1.0, kinematic_cap_ = 0.0;
+    double kinematic_cap_ = 0.0;
     PcisphParams<Dim> pcisph_;
     StepLimits limits_;
     CellGrid<Dim> grid_;
