@@ -1,9 +1,16 @@
 // Hydrostatic tank at rest: after settling, pressure grows linearly with depth, p = rho0 g (H - y), and
 // nothing moves. Set-up: a 0.1 m x 0.1 m column of water in a tank of the same width, dp = H/40, h = 1.5 dp
-// (Wendland), 1.5 s of settling, WCSPH
-// (Tait, c0 = 10 sqrt(2 g H)), continuity with Fourtakas density diffusion, Adami walls, artificial
-// viscosity. Reference: hydrostatics; the total weight fixes p at the bottom to rho0 g H whatever the
-// compression. Tolerances from the issue: 2 % at the bottom, velocities below 1 % of sqrt(g H).
+// (Wendland), Adami walls, artificial viscosity. Reference: hydrostatics; the total weight fixes p at the
+// bottom to rho0 g H whatever the compression. Tolerances from the issue: 2 % at the bottom, velocities
+// below 1 % of sqrt(g H).
+//
+// "After settling" is measured, not assumed. A tank started on a square lattice settles twice: the start
+// (the column finds its compression, 0 - 1.5 s), then the lattice itself. Compressed, the square lattice
+// gives way in a few slow rearrangements that start at the floor's centre and travel up or along the
+// floor (WCSPH: up to 2.0 % of sqrt(g H) between t = 2 and 3 s; measured 2026-11-26, docs/validation.md,
+// "Tank at rest"). Once it has, the tank is still (WCSPH under 0.1 %). The velocity check therefore covers
+// every window of the last second of a 4 s run, not one instant: a check at 1.5 s alone had passed in the
+// quiet spell between the two.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -20,21 +27,38 @@ using sphfsi::fluid::Kind;
 using sphfsi::protocol::F64Array;
 using sphfsi::protocol::I32Array;
 
+namespace {
+
+double largest_fluid_speed(const sphfsi::fluid::ParticleStore<2>& P) {
+    double v = 0.0;
+    for (std::size_t i = 0; i < P.size(); ++i)
+        if (P.kind[i] == Kind::Fluid) v = std::max(v, norm(P.v[i]));
+    return v;
+}
+
+}  // namespace
+
 TEST_SUITE("hydrostatic") {
     TEST_CASE("hydrostatic tank at rest") {
-        const double H = 0.1, dp = H / 40, g = 9.81, rho0 = 1000.0;
+        // WCSPH (Tait, c0 = 10 sqrt(2 g H)), continuity with Fourtakas density diffusion.
+        const double H = 0.1, dp = H / 40, g = 9.81, rho0 = 1000.0, t_end = 4.0, t_still = 3.0;
         auto solver = start(wcsph(water_tank(dp, 0.1, 0.12, 0.1, H)));
         std::size_t crossings = 0;
-        run(*solver, 1.5, 0.05, [&](const auto&) { crossings += solver->simulation().wall_crossings().count; });
+        double v_settling = 0.0, v_still = 0.0;  // largest fluid speeds over [1.5, 3) s and [3, 4] s
+        run(*solver, t_end, 0.05, [&](const auto&) {
+            crossings += solver->simulation().wall_crossings().count;
+            const double t = solver->simulation().time();
+            if (t < 1.5 - 1e-9) return;
+            double& worst = t < t_still - 1e-9 ? v_settling : v_still;
+            worst = std::max(worst, largest_fluid_speed(solver->simulation().particles()));
+        });
         const auto& P = solver->simulation().particles();
         // Layer-averaged pressure against depth.
         const int layers = 40;
         std::vector<double> p_sum(layers, 0.0), y_sum(layers, 0.0);
         std::vector<int> count(layers, 0);
-        double v_max = 0.0;
         for (std::size_t i = 0; i < P.size(); ++i) {
             if (P.kind[i] != Kind::Fluid) continue;
-            v_max = std::max(v_max, norm(P.v[i]));
             const int l = std::clamp(static_cast<int>(P.x[i][1] / dp), 0, layers - 1);
             p_sum[l] += P.p[i];
             y_sum[l] += P.x[i][1];
@@ -51,10 +75,11 @@ TEST_SUITE("hydrostatic") {
         const double bottom_error = std::abs(p0 - exact0) / exact0;
         std::printf("hydrostatic: bottom layer error %.3f %% (tolerance 2 %%), largest error along depth %.3f %% of rho0 g H\n",
                     100 * bottom_error, 100 * worst);
-        std::printf("hydrostatic: largest speed %.2e m/s = %.3f %% of sqrt(g H) (tolerance 1 %%)\n", v_max,
-                    100 * v_max / std::sqrt(g * H));
+        std::printf("hydrostatic: largest speed over t = 3 - 4 s %.2e m/s = %.3f %% of sqrt(g H) (tolerance 1 %%); "
+                    "over the lattice's settling, t = 1.5 - 3 s, %.3f %% (not checked)\n",
+                    v_still, 100 * v_still / std::sqrt(g * H), 100 * v_settling / std::sqrt(g * H));
         CHECK(bottom_error < 0.02);
-        CHECK(v_max < 0.01 * std::sqrt(g * H));
+        CHECK(v_still < 0.01 * std::sqrt(g * H));
         CHECK(crossings == 0);
     }
 
