@@ -232,8 +232,9 @@ TableSchema build() {
 
     TableSchema& density = s.table("density", "how densities are obtained");
     density.choice("method", {"summation", "shepard", "continuity"},
-                   "\"summation\": rho = sum m W; \"shepard\": summation divided by the Shepard sum sum V_j W with the "
-                   "volumes V = m / rho of the plain sums (CSPM); \"continuity\": integrate drho/dt = sum m (v_i - v_j) . grad W")
+                   "\"summation\": rho = sum m_sum W, with m_sum = rho0 / (sum W on the initial lattice) so that water at rest "
+                   "on it is at rho0; \"shepard\": summation divided by the Shepard sum sum V_j W with the volumes "
+                   "V = m_sum / rho of the plain sums (CSPM); \"continuity\": integrate drho/dt = sum m (v_i - v_j) . grad W")
         .fallback("continuity");
     density.choice("diffusion", {"none", "molteni", "fourtakas"},
                    "delta-SPH density diffusion in the continuity equation: Molteni & Colagrossi (2009), or "
