@@ -131,6 +131,13 @@ void check_combinations(const Value& fluid, const std::string& path, Errors& err
     if ((periodic == "y" || periodic == "xy") && num(tank, "height") < 3.0 * support)
         errors.add(&tank, "key '" + key(path, "tank.height") + "': a periodic axis must be at least 3 kernel support radii long (" +
                               std::to_string(3.0 * support) + " m)");
+    // A fluid particle by a wall must find wall particles over its whole support, or its kernel sums are
+    // cut there (the Gaussian's 3 h at h = 1.5 dp reaches 4.5 dp, past the default 3 layers).
+    const auto layers = tank.at("wall_layers").as_int();
+    if (periodic != "xy" && static_cast<double>(layers) * num(fluid, "dp") < support * (1.0 - 1e-9))
+        errors.add(&tank, "key '" + key(path, "tank.wall_layers") + "': " + std::to_string(layers) +
+                              " layers of dp are thinner than the kernel's support radius (" + std::to_string(support) +
+                              " m); allowed: at least " + std::to_string(static_cast<long long>(std::ceil(support / num(fluid, "dp") - 1e-9))));
     if ((periodic == "y" || periodic == "xy") && tank.at("closed_top").as_bool())
         errors.add(&tank, "key '" + key(path, "tank.closed_top") + "': a tank periodic in y has no bottom or top wall");
     if (model == "wcsph" && pressure.at("c0").as_double() == 0.0 && pressure.at("u_max").as_double() == 0.0) {
