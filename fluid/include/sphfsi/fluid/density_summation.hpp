@@ -3,10 +3,10 @@
 // rho_i = m sum_j W_ij / sum_j V_j W_ij with the particle volumes V_j = m / rho~_j of the plain sums rho~ of
 // the same positions (Chen et al. 1999; Randles & Libersky 1996). The normalisation removes the kernel
 // truncation deficit at a free surface (to first order), while the plain sums inside it keep the response
-// to compression. On a uniform lattice both forms give m sum_j W_ij, so `mass` is the summation mass
-// (Simulation2D: rho0 over the kernel sum of the initial lattice), with which that is exactly rho0. (Normalising with the previous step's
-// densities instead would make the density blind to compression: particles squeezed together would raise
-// numerator and denominator alike.)
+// to compression. (Normalising with the previous step's densities instead would make the density blind to
+// compression: particles squeezed together would raise numerator and denominator alike.) On a uniform
+// lattice both forms give m sum_j W_ij, so `mass` is the summation mass (Simulation2D: rho0 over the kernel
+// sum of the initial lattice), with which that is exactly rho0.
 // Boundary particles contribute their mass to the fluid's sum in every wall model (they fill the kernel
 // support below a wall); with `boundaries_too` (the dummy model) they get a density of their own as well.
 #include <cstdint>
