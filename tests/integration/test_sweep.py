@@ -28,6 +28,7 @@ SWEEP = os.path.join(harness.ROOT, "tools", "sweep.py")
 BEAM = os.path.join(harness.ROOT, "scenarios", "beam_only.toml")
 GUARD = os.path.join(harness.ROOT, "sweeps", "guard_structure.toml")
 MM_CSV = os.path.join(harness.ROOT, "tests", "fluid", "data", "martin_moyce_1952_front_n2_2.csv")
+MM_HEIGHT_CSV = os.path.join(harness.ROOT, "tests", "fluid", "data", "martin_moyce_1952_height_n2_2.csv")
 EI = 2.1e11 * 0.02 ** 3 / 12
 F1 = 1.87510407 ** 2 / (2 * math.pi) * math.sqrt(EI / (7850.0 * 0.02))
 # The corotational cantilever under a sudden P L^2 / (E I) = 2, undamped: newmark fails above some step.
@@ -549,8 +550,27 @@ def test_override_values_round_trip():
 # The surge-front metric on a record built by hand, then on the real fluid participant if it is built.
 
 
-def test_surge_front_metric_on_a_constructed_record():
+def write_fluid_frames(d, times, frames, dp):
+    """A completed record holding only /frames/fluid (time, position, kind) and the fluid's dp: frames is a
+    list of (positions n x 2, kinds n), padded to one length with wall particles far left."""
     import h5py
+    import numpy as np
+    n = max(len(p) for p, _ in frames)
+    with h5py.File(os.path.join(d, "record.h5"), "w") as f:
+        f.attrs["status"] = "completed"
+        f.create_group("participants/fluid").attrs["dp"] = dp
+        pos = f.create_dataset("frames/fluid/position", (len(times), n, 2), dtype="float64")
+        kind = f.create_dataset("frames/fluid/kind", (len(times), n, 1), dtype="int32")
+        f["frames/fluid/time"] = times
+        for i, (p, k) in enumerate(frames):
+            full_p = np.full((n, 2), -1.0)
+            full_k = np.ones((n,), dtype=np.int32)
+            full_p[:len(p)], full_k[:len(k)] = p, k
+            pos[i] = full_p
+            kind[i] = full_k[:, None]
+
+
+def test_surge_front_metric_on_a_constructed_record():
     import numpy as np
     a, g, dp = 0.1, 9.81, 0.0025
     scale = math.sqrt(2 * g / a)
@@ -571,19 +591,7 @@ def test_surge_front_metric_on_a_constructed_record():
         wall = np.array([[0.6, y] for y in ys])
         frames.append((np.vstack([block, droplet, wall]),
                        np.array([0] * len(block) + [0] + [1] * len(wall), dtype=np.int32)))
-    n = max(len(p) for p, _ in frames)
-    with h5py.File(os.path.join(d, "record.h5"), "w") as f:
-        f.attrs["status"] = "completed"
-        f.create_group("participants/fluid").attrs["dp"] = dp
-        pos = f.create_dataset("frames/fluid/position", (len(T), n, 2), dtype="float64")
-        kind = f.create_dataset("frames/fluid/kind", (len(T), n, 1), dtype="int32")
-        f["frames/fluid/time"] = T / scale
-        for i, (p, k) in enumerate(frames):
-            full_p = np.full((n, 2), -1.0)  # padding rows: wall particles far left
-            full_k = np.ones((n,), dtype=np.int32)
-            full_p[:len(p)], full_k[:len(k)] = p, k
-            pos[i] = full_p
-            kind[i] = full_k[:, None]
+    write_fluid_frames(d, T / scale, frames, dp)
     ctx = metrics.Context(metrics.RunInfo("r", d), [], harness.ROOT)
     out = metrics.compute("surge_front", d, {"a": a, "reference_csv": MM_CSV}, ctx)
     assert out["n_points"] == 9, out
@@ -596,6 +604,44 @@ def test_surge_front_metric_on_a_constructed_record():
     try:
         metrics.compute("surge_front", d, {"a": a, "reference_csv": MM_CSV, "T_max": 3.0}, ctx)
         raise AssertionError("expected a MetricError: the frames stop at T = 2.6")
+    except metrics.MetricError as err:
+        assert "reach" in str(err), err
+
+
+def test_column_height_metric_on_a_constructed_record():
+    import numpy as np
+    a, g, dp = 0.1, 9.81, 0.0025
+    scale = math.sqrt(g / a)
+    tref, href = metrics.read_reference_curve(MM_HEIGHT_CSV)
+    d = harness.out_dir("height")
+    # Water 5 % higher than the experiment at the back wall at every reference tau (top centre + dp/2), its
+    # first column one spacing lower (the wall lag the two-column band looks past), a droplet above it and
+    # a higher block beyond the band, neither of which may count.
+    tau = np.unique(np.concatenate([tref[tref <= 2.6], np.linspace(0.0, 2.6, 27)]))
+    frames = []
+    for ti in tau:
+        top = 1.05 * np.interp(ti, np.concatenate([[0.0], tref]), np.concatenate([[1.0 / 1.05], href])) * 2 * a
+        block = [(x, y) for x in np.arange(dp / 2, 10 * dp, dp) for y in np.arange(dp / 2, top - dp / 2 + 1e-12, dp)
+                 if not (x < dp and y > top - dp)]
+        block = np.array(block)
+        block[:, 1] += (top - dp / 2) - block[:, 1].max()  # the highest centre exactly at top - dp/2
+        droplet = np.array([[dp, top + 5 * dp]])
+        beyond = np.array([[x, top + 3 * dp] for x in np.arange(5 * dp, 8 * dp, dp)])
+        frames.append((np.vstack([block, droplet, beyond]), np.zeros(len(block) + 1 + len(beyond), dtype=np.int32)))
+    write_fluid_frames(d, tau / scale, frames, dp)
+    ctx = metrics.Context(metrics.RunInfo("r", d), [], harness.ROOT)
+    out = metrics.compute("column_height", d, {"a": a, "reference_csv": MM_HEIGHT_CSV}, ctx)
+    assert out["n_points"] == 11, out
+    assert abs(out["mean_rel"] - 0.05) < 1e-9 and abs(out["max_rel"] - 0.05) < 1e-9, out
+    assert abs(out["mean_signed_rel"] - 0.05) < 1e-9, out
+    # Without the neighbour rule the droplet is taken for the top; with a one-column band, the lagging column.
+    assert metrics.compute("column_height", d, {"a": a, "reference_csv": MM_HEIGHT_CSV,
+                                                "k_neighbours": 0}, ctx)["max_rel"] > 0.06
+    assert metrics.compute("column_height", d, {"a": a, "reference_csv": MM_HEIGHT_CSV,
+                                                "band_dp": 1.0}, ctx)["mean_signed_rel"] < 0.05 - 1e-6
+    try:
+        metrics.compute("column_height", d, {"a": a, "reference_csv": MM_HEIGHT_CSV, "tau_max": 3.5}, ctx)
+        raise AssertionError("expected a MetricError: the frames stop at tau = 2.6")
     except metrics.MetricError as err:
         assert "reach" in str(err), err
 
