@@ -1,6 +1,7 @@
 """Charts of docs/validation.md that tools/chart.py does not draw (quantities against a setting rather than
 error against cost), from the results CSVs next to this file.
-usage: /usr/bin/python3 docs/validation/plots.py   (rewrites compressibility.png, added_mass.png, pcisph.png)
+usage: /usr/bin/python3 docs/validation/plots.py   (rewrites compressibility.png, added_mass.png, pcisph.png,
+       dam_break_curves.png)
 """
 import csv
 import math
@@ -154,7 +155,45 @@ def pcisph():
     save(fig, "pcisph.png")
 
 
+def reference(name):
+    """Martin & Moyce's table `name` (tests/fluid/data): two columns after '#' lines and a header."""
+    path = os.path.join(HERE, "..", "..", "tests", "fluid", "data", name)
+    with open(path) as f:
+        data = [line.split(",") for line in f if line[0].isdigit()]
+    return [float(x) for x, _ in data], [float(y) for _, y in data]
+
+
+def dam_break_curves():
+    rs = rows_skipping_comments("dam_break_curves.csv")
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    panels = ((axes[0], "T", "Z", "martin_moyce_1952_front_n2_2.csv", "surge front Z = x / a",
+               "T = t sqrt(2 g / a)", 2.6),
+              (axes[1], "tau", "H", "martin_moyce_1952_height_n2_2.csv",
+               "column height at the back wall H / (2 a)", "tau = t sqrt(g / a)", 2.6))
+    colours = {"standard": "tab:blue", "WCSPH": "tab:orange", "PCISPH": "tab:green"}
+    for ax, xc, yc, ref, title, xlabel, xmax in panels:
+        for method, colour in colours.items():
+            for slip, style in (("no_slip", "--"), ("free_slip", "-")):
+                sel = [r for r in rs if r["method"] == method and r["slip"] == slip and num(r[xc]) <= xmax]
+                ax.plot([num(r[xc]) for r in sel], [num(r[yc]) for r in sel], style, color=colour, lw=1.2,
+                        label=f"{method}, {slip.replace('_', '-')}")
+        x, y = reference(ref)
+        keep = [i for i, v in enumerate(x) if v <= xmax]
+        ax.plot([x[i] for i in keep], [y[i] for i in keep], "ko", ms=5, label="Martin & Moyce (1952)")
+        ax.set_xlabel(xlabel)
+        ax.set_title(title + ", dp = a/80")
+        ax.grid(alpha=0.3)
+    axes[1].legend(fontsize=7)
+    save(fig, "dam_break_curves.png")
+
+
+def rows_skipping_comments(name):
+    with open(os.path.join(HERE, name)) as f:
+        return list(csv.DictReader(line for line in f if not line.startswith("#")))
+
+
 if __name__ == "__main__":
     compressibility()
     added_mass()
     pcisph()
+    dam_break_curves()
