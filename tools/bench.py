@@ -2,11 +2,13 @@
 """sphfsi's benchmark command (the `sphfsi bench` of the performance issue): fixed, deterministic
 workloads, each run as its own process, repeated, medians printed.
 
-usage: /usr/bin/python3 tools/bench.py [--bin build/bin] [--repeats 5] [--quick] [--only fluid|pcisph|coupled]
+usage: /usr/bin/python3 tools/bench.py [--bin build/bin] [--repeats 5] [--quick]
+                                       [--only fluid|standard|pcisph|coupled]
 
 Workloads:
   fluid    the dam break of docs/benchmarks.md (Wendland, h = 1.41 dp, WCSPH with Fourtakas diffusion,
            artificial viscosity, symplectic Euler) at ~10k, ~40k and ~160k particles, 1 and 2 threads
+  standard the same with the thesis's standard SPH (p = k (rho - rho0), summation densities)
   pcisph   the same with PCISPH (fewer steps: each costs 15-30 WCSPH steps)
   coupled  the elastic gate (scenarios/elastic_gate.toml) through the coordinator, to 0.05 s: as the scene
            stands (dp = 1 mm, fluid on 2 threads, windows of up to 10 fluid steps) with the participants'
@@ -94,7 +96,7 @@ def main():
     args = sys.argv[1:]
     # Anything but the documented options (--help included) prints the usage instead of starting a long run.
     valid = {"--bin": lambda v: True, "--repeats": lambda v: v.isdigit() and int(v) > 0,
-             "--only": lambda v: v in ("fluid", "pcisph", "coupled")}
+             "--only": lambda v: v in ("fluid", "standard", "pcisph", "coupled")}
     i = 0
     while i < len(args):
         if args[i] in valid and i + 1 < len(args) and valid[args[i]](args[i + 1]):
@@ -114,11 +116,11 @@ def main():
     sizes = ["10k"] if quick else ["10k", "40k", "160k"]
     print(f"sphfsi benchmarks, {repeats} repeats each, medians (min - max); binaries in {bin_dir}")
     header = "| workload | threads | particles | steps | wall [s] | particle-steps/s | min - max | peak RSS / particle [B] |"
-    if only in (None, "fluid", "pcisph"):
+    if only in (None, "fluid", "standard", "pcisph"):
         print(header)
         print("|---|---|---|---|---|---|---|---|")
-        for model, steps in (("wcsph", 200), ("pcisph", 30)):
-            if only not in (None, "fluid" if model == "wcsph" else "pcisph"):
+        for workload, model, steps in (("fluid", "wcsph", 200), ("standard", "standard", 200), ("pcisph", "pcisph", 30)):
+            if only not in (None, workload):
                 continue
             for m, t, n, s, wall, rate, lo, hi, rss in fluid_rows(bin_dir, model, sizes, [1, 2], steps, repeats):
                 print(f"| dam break {m} | {t} | {n} | {s} | {wall:.3f} | {rate / 1e6:.2f} M | {lo / 1e6:.2f} - {hi / 1e6:.2f} M | {rss:.0f} |")

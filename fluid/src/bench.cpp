@@ -2,7 +2,8 @@
 // 0.5 m tank) at about 10k, 40k and 160k fluid particles, 1 and 2 threads, for each pressure model.
 // Set-up as in DualSPHysics's dam-break benchmarks: Wendland kernel, h = 1.41 dp, artificial viscosity
 // (alpha = 0.02), Adami walls, symplectic (semi-implicit) Euler; WCSPH with Fourtakas density diffusion;
-// PCISPH with summation densities (eta = 1 %); standard SPH with k = 1000 m^2/s^2. A model named with
+// PCISPH with summation densities (eta = 1 %); standard SPH as the thesis runs it (and the validation
+// sweeps call it): k = 1000 m^2/s^2, summation densities. A model named with
 // "+kgc" (wcsph+kgc, standard+kgc) runs with pressure.kernel_correction = true, to time the correction.
 //
 //   sphfsi-fluid-bench [--sizes 10k,40k,160k] [--threads 1,2] [--models wcsph,pcisph,standard] [--steps N]
@@ -54,8 +55,9 @@ Value scene(double dp, const std::string& name, int threads) {
     set("time.integrator", "symplectic_euler");
     set("pressure.model", model);
     set("pressure.kernel_correction", corrected);
-    set("density.method", model == "pcisph" ? "summation" : "continuity");
-    set("density.diffusion", model == "pcisph" ? "none" : "fourtakas");
+    const bool summed = model == "pcisph" || model == "standard";
+    set("density.method", summed ? "summation" : "continuity");
+    set("density.diffusion", summed ? "none" : "fourtakas");
     Value::Table block;
     block["x0"] = 0.0;
     block["y0"] = 0.0;
