@@ -189,12 +189,12 @@ void check_against_experiment(const DamBreakResult& res) {
 }  // namespace
 
 TEST_SUITE("dam_break") {
-    TEST_CASE("WCSPH surge front against Martin & Moyce (1952)") {
+    TEST_CASE("WCSPH: surge front and column height against Martin & Moyce (1952)") {
         const auto res = run_dam_break(wcsph(dam_break(0.1 / 40)), "WCSPH");
         check_against_experiment(res);
     }
 
-    TEST_CASE("PCISPH surge front, and the density error stays under eta") {
+    TEST_CASE("PCISPH: surge front and column height, and the density error stays under eta") {
         const auto res = run_dam_break(pcisph(dam_break(0.1 / 40)), "PCISPH");
         check_against_experiment(res);
         CHECK(res.iterations >= 3 * res.steps);   // at least three corrections per step
