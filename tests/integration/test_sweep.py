@@ -547,7 +547,8 @@ def test_override_values_round_trip():
 
 
 # ---------------------------------------------------------------------------------------------------
-# The surge-front metric on a record built by hand, then on the real fluid participant if it is built.
+# The dam-break metrics (surge front, column height) on records built by hand, then the surge front on the
+# real fluid participant if it is built.
 
 
 def write_fluid_frames(d, times, frames, dp):
