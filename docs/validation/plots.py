@@ -6,6 +6,7 @@ usage: /usr/bin/python3 docs/validation/plots.py   (rewrites compressibility.png
 import csv
 import math
 import os
+import sys
 
 import matplotlib
 
@@ -13,11 +14,15 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+from metrics import read_reference_curve  # noqa: E402
 
 
 def rows(name):
+    """A CSV next to this file, without its '#' lines (the source notes some of them carry)."""
     with open(os.path.join(HERE, name)) as f:
-        return list(csv.DictReader(f))
+        return list(csv.DictReader(line for line in f if not line.startswith("#")))
 
 
 def num(v):
@@ -155,16 +160,8 @@ def pcisph():
     save(fig, "pcisph.png")
 
 
-def reference(name):
-    """Martin & Moyce's table `name` (tests/fluid/data): two columns after '#' lines and a header."""
-    path = os.path.join(HERE, "..", "..", "tests", "fluid", "data", name)
-    with open(path) as f:
-        data = [line.split(",") for line in f if line[0].isdigit()]
-    return [float(x) for x, _ in data], [float(y) for _, y in data]
-
-
 def dam_break_curves():
-    rs = rows_skipping_comments("dam_break_curves.csv")
+    rs = rows("dam_break_curves.csv")
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
     panels = ((axes[0], "T", "Z", "martin_moyce_1952_front_n2_2.csv", "surge front Z = x / a",
                "T = t sqrt(2 g / a)", 2.6),
@@ -177,19 +174,13 @@ def dam_break_curves():
                 sel = [r for r in rs if r["method"] == method and r["slip"] == slip and num(r[xc]) <= xmax]
                 ax.plot([num(r[xc]) for r in sel], [num(r[yc]) for r in sel], style, color=colour, lw=1.2,
                         label=f"{method}, {slip.replace('_', '-')}")
-        x, y = reference(ref)
-        keep = [i for i, v in enumerate(x) if v <= xmax]
-        ax.plot([x[i] for i in keep], [y[i] for i in keep], "ko", ms=5, label="Martin & Moyce (1952)")
+        x, y = read_reference_curve(os.path.join(ROOT, "tests", "fluid", "data", ref))
+        ax.plot(x[x <= xmax], y[x <= xmax], "ko", ms=5, label="Martin & Moyce (1952)")
         ax.set_xlabel(xlabel)
         ax.set_title(title + ", dp = a/80")
         ax.grid(alpha=0.3)
     axes[1].legend(fontsize=7)
     save(fig, "dam_break_curves.png")
-
-
-def rows_skipping_comments(name):
-    with open(os.path.join(HERE, name)) as f:
-        return list(csv.DictReader(line for line in f if not line.startswith("#")))
 
 
 if __name__ == "__main__":
