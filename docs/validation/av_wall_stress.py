@@ -12,13 +12,7 @@ usage: /usr/bin/python3 docs/validation/av_wall_stress.py
 """
 import math
 
-
-def wendland_dw(r, h):
-    """dW/dr of the 2D Wendland C2 kernel, W = 7 / (4 pi h^2) (1 - q/2)^4 (2q + 1), q = r / h < 2."""
-    q = r / h
-    if q >= 2.0:
-        return 0.0
-    return 7.0 / (4.0 * math.pi * h * h) * (-5.0 * q) * (1.0 - q / 2.0) ** 3 / h
+from vonneumann import grad_factor  # W'(r) / r of the code's kernels, next to this file
 
 
 def wall_stress_coefficient(dp, h_over_dp=1.5, wall_layers=3):
@@ -39,7 +33,7 @@ def wall_stress_coefficient(dp, h_over_dp=1.5, wall_layers=3):
                 if r >= 2.0 * h or vdotx >= 0.0:
                     continue
                 mu = h * vdotx / (r * r + 0.01 * h * h)
-                ax += dp * dp * mu * dx * wendland_dw(r, h) / r   # m_j / rho = dp^2
+                ax += dp * dp * mu * dx * float(grad_factor("wendland", r, h))   # m_j / rho = dp^2
         stress += dp * ax
     return -stress  # the wall drags the fluid back: report the magnitude
 
