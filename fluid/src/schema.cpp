@@ -204,8 +204,9 @@ TableSchema build() {
                                         "and then rises at a constant speed until its bottom is where its top was "
                                         "(the release of a dam-break experiment); without it the water is released "
                                         "at once. Solid particles, like a coupled structure's; not with an "
-                                        "interface mesh. The jet under it differs between pressure models and "
-                                        "is not validated (docs/validation.md, \"Dam break\")");
+                                        "interface mesh. It does not explain the lag of Martin & Moyce's front, "
+                                        "and the outflow under it is not validated (docs/validation.md, \"Dam "
+                                        "break\")");
     gate.number("x0", "left face").unit("m").required();
     gate.number("thickness", "thickness; 0 = tank.wall_layers dp, a full kernel support").unit("m").at_least(0).fallback(0.0);
     gate.number("height", "height above the floor; 0 = the tank height").unit("m").at_least(0).fallback(0.0);
