@@ -13,6 +13,12 @@ std::string fmt(double x) {
     s << x;
     return s.str();
 }
+// A markdown table cell: a literal '|' (as in |residual| or |g|) would end the cell, so it is escaped.
+std::string table_cell(const std::string& text) {
+    std::string out;
+    for (char c : text) out += c == '|' ? std::string("\\|") : std::string(1, c);
+    return out;
+}
 std::string quoted_list(const std::vector<std::string>& xs) {
     std::string out;
     for (std::size_t i = 0; i < xs.size(); ++i) out += (i ? ", \"" : "\"") + xs[i] + "\"";
@@ -138,7 +144,7 @@ void Field::document(const std::string& prefix, std::string& out) const {
             def += (i ? ", " : "") + describe(fallback_->as_array()[i]);
         def += "]";
     }
-    out += "| `" + key + "` | " + allowed() + " | " + def + " | " + doc_ + " |\n";
+    out += "| `" + key + "` | " + table_cell(allowed()) + " | " + table_cell(def) + " | " + table_cell(doc_) + " |\n";
 }
 
 Field& TableSchema::add(Field f) {

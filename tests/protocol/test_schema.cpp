@@ -86,6 +86,19 @@ TEST_CASE("the reference documents every key") {
         CHECK(doc.find(key) != std::string::npos);
 }
 
+TEST_CASE("a '|' in a key's description does not split its row of the markdown table") {
+    TableSchema s;
+    s.number("tol", "converged when |r| <= tol |x|").fallback(1.0);
+    const std::string doc = s.document("c");
+    const std::string row = doc.substr(doc.find("| `c.tol`"));
+    CHECK(row.find("converged when \\|r\\| <= tol \\|x\\|") != std::string::npos);
+    // Four cells: the row's unescaped bars are its five borders.
+    int bars = 0;
+    for (std::size_t i = 0; i < row.find('\n'); ++i)
+        if (row[i] == '|' && (i == 0 || row[i - 1] != '\\')) ++bars;
+    CHECK(bars == 5);
+}
+
 TEST_CASE("dotted paths reach into tables and arrays of tables") {
     Value root;
     set_path(root, "fluid.dp", Value(0.01));
