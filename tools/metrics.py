@@ -437,15 +437,20 @@ def reference_points(params, context, time_name):
     return x[keep], y[keep]
 
 
-def compare_with_reference(x_ref, y_ref, x, y, time_name):
-    """Relative errors of a measured curve y(x), interpolated linearly over its finite points, at the
-    reference points; the curve must reach the last of them (never extrapolated)."""
+def relative_errors(x_ref, y_ref, x, y, time_name):
+    """(y - y_ref) / y_ref at each reference point, the measured curve y(x) interpolated linearly over its
+    finite points; the curve must reach the last of them (never extrapolated)."""
     ok = np.isfinite(y)
     x, y = x[ok], y[ok]
     if x.size < 2 or x[-1] < x_ref[-1] - 1e-9:
         raise MetricError(f"the frames reach {time_name} = {x[-1] if x.size else 0:.3g}, not the last reference "
                           f"point {time_name} = {x_ref[-1]:.3g}")
-    rel = (np.interp(x_ref, x, y) - y_ref) / y_ref
+    return (np.interp(x_ref, x, y) - y_ref) / y_ref
+
+
+def compare_with_reference(x_ref, y_ref, x, y, time_name):
+    """Mean, largest and signed mean of relative_errors."""
+    rel = relative_errors(x_ref, y_ref, x, y, time_name)
     return {"mean_rel": float(np.mean(np.abs(rel))), "max_rel": float(np.max(np.abs(rel))),
             "mean_signed_rel": float(np.mean(rel)), "n_points": int(x_ref.size)}
 

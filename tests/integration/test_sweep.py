@@ -766,11 +766,12 @@ def test_every_repository_sweep_passes_check():
     checked = 0
     for name in names:
         sw = specs.load(os.path.join(folder, name))
+        ctx = metrics.Context(None, [], sw.dir)  # where tools/sweep.py resolves a metric's data files
         for m in sw.metrics:
             metrics.check_params(m["name"], m["params"])
             for key, value in m["params"].items():
-                if key.endswith("_csv"):  # resolved against the sweep file's folder, as tools/sweep.py does
-                    assert os.path.isfile(os.path.join(sw.dir, value)), f"sweeps/{name}: {key} = {value}: no such file"
+                if key.endswith("_csv"):
+                    assert os.path.isfile(ctx.resolve(value)), f"sweeps/{name}: {key} = {value}: no such file"
         ends = [[]]
         if sw.bisect is not None:
             b = sw.bisect
