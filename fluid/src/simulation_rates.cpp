@@ -1,0 +1,300 @@
+// Simulation2D: evaluation of the rates (accelerations, density rates, pressures) at the current state,
+// and the stable step they allow.
+#include "sphfsi/fluid/simulation.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "format.hpp"
+#include "sphfsi/fluid/density_summation.hpp"
+#include "sphfsi/fluid/kernel_dispatch.hpp"
+#include "sphfsi/fluid/wall_boundary.hpp"
+#include "sphfsi/protocol/solver.hpp"
+
+namespace sphfsi::fluid {
+
+using protocol::SolverError;
+
+void Simulation2D::wrap_periodic() {
+    auto& P = st_.P;
+    for (int k = 0; k < Dim; ++k) {
+        if (!s_.periodic[static_cast<std::size_t>(k)]) continue;
+        const double lo = domain_lo_[k], len = domain_hi_[k] - domain_lo_[k];
+        const long long n = static_cast<long long>(P.size());
+#pragma omp parallel for schedule(static)
+        for (long long q = 0; q < n; ++q) {
+            double& x = P.x[static_cast<std::size_t>(q)][k];
+            if (x < lo || x >= lo + len) {
+                x -= std::floor((x - lo) / len) * len;
+                if (x >= lo + len) x = lo;  // rounding of a value just below lo
+            }
+        }
+    }
+}
+
+void Simulation2D::move_solids(double t) {
+    if (n_solid_ == 0 || !kinematics_) return;
+    auto& P = st_.P;
+    const long long n = static_cast<long long>(P.size());
+#pragma omp parallel for schedule(static)
+    for (long long q = 0; q < n; ++q) {
+        const std::size_t i = static_cast<std::size_t>(q);
+        if (P.kind[i] != Kind::Solid) continue;
+        const std::size_t k = static_cast<std::size_t>(P.id[i] - first_solid_id_);
+        kinematics_(k, t, P.x[i], P.v[i], solid_acc_[k]);
+    }
+}
+
+void Simulation2D::sort_particles() {
+    wrap_periodic();
+    const Kind* kind = st_.P.kind.data();
+    grid_.build(st_.P.x, order_, [kind](std::size_t i) { return kind[i] == Kind::Escaped; });
+    bool identity = true;
+    for (std::size_t k = 0; k < order_.size() && identity; ++k) identity = order_[k] == k;
+    if (!identity) st_.P.reorder(order_, scratch_);
+}
+
+Simulation2D::V Simulation2D::boundary_acceleration(std::uint32_t w) const {
+    const auto& P = st_.P;
+    if (P.kind[w] != Kind::Solid) return V{};
+    return solid_acc_[static_cast<std::size_t>(P.id[w] - first_solid_id_)];
+}
+
+void Simulation2D::evaluate() {
+    auto& P = st_.P;
+    move_solids(st_.t);
+    sort_particles();
+    const std::size_t n = P.size();
+    const long long nn = static_cast<long long>(n);
+    const bool pcisph = s_.pressure == PressureModel::Pcisph;
+    const bool dummy = s_.wall == WallModel::Dummy;
+    const bool summation = s_.density != DensityMethod::Continuity;
+    with_kernels<Dim>(s_.kernel, h_, [&](const auto& kw, const auto& kg) {
+        if (summation) {
+            // Written in place: a particle's sum reads no density but its own (a boundary particle keeps it).
+            const std::vector<double>* volumes = nullptr;
+            if (s_.density == DensityMethod::Shepard) {
+                summation_density(P, grid_, kw, summation_mass_, true, nullptr, rho_scratch_);  // plain sums: the volumes
+                volumes = &rho_scratch_;
+            }
+            summation_density(P, grid_, kw, summation_mass_, dummy, volumes, P.rho);
+        }
+        // Pressures of fluid particles and (dummy model) boundary particles from the equation of state.
+        // PCISPH's pressures come from its solve in the step; P.p keeps those of the last step taken (zero
+        // before the first), which is what the record shows, and fill_rate_factors leaves them out of
+        // these rates, which are PCISPH's non-pressure accelerations.
+        const bool tait = s_.pressure == PressureModel::Wcsph;
+#pragma omp parallel for schedule(static)
+        for (long long q = 0; q < nn; ++q) {
+            const std::size_t i = static_cast<std::size_t>(q);
+            const bool fluid = P.kind[i] == Kind::Fluid;
+            if (!fluid && !(dummy && is_boundary(P.kind[i]))) continue;  // Adami: extrapolated below
+            if (!pcisph) {
+                double p = tait ? tait_.pressure(P.rho[i]) : standard_.pressure(P.rho[i]);
+                // A boundary particle never pulls fluid onto the wall; fluid may be clamped by choice.
+                if (!fluid || s_.clamp_negative) p = std::max(p, 0.0);
+                P.p[i] = p;
+            }
+            if (!fluid) P.v_visc[i] = P.v[i];
+        }
+        if (!dummy)
+            extrapolate_boundary_state(P, grid_, kw, rates_.gravity, s_.clamp_negative,
+                                       [&](double p) { return boundary_density(p); },
+                                       [&](std::uint32_t w) { return boundary_acceleration(w); });
+        KinematicFloor floor;
+        if (kinematic_floor_) {
+            rho_scratch_.resize(n);
+            floor = KinematicFloor{kinematic_cap_, summation_mass_, rho_scratch_.data()};
+        }
+        update_correction(kg);
+        compute_rates(P, grid_, kw, kg, ViscosityKernel<Dim>(h_), fill_rate_factors(), rates_,
+                      kinematic_floor_ ? &floor : nullptr);
+        if (surface_.on()) apply_surface_stress(P, grid_, kg, mass_, surface_);
+        if (kinematic_floor_) {
+#pragma omp parallel for schedule(static)
+            for (long long q = 0; q < nn; ++q) {
+                const std::size_t i = static_cast<std::size_t>(q);
+                P.rho[i] = std::max(P.rho[i], rho_scratch_[i]);
+            }
+        }
+    });
+    reduce_rates();
+    st_.rates_fresh = true;
+}
+
+const RateFactors* Simulation2D::fill_rate_factors() {
+    const auto& P = st_.P;
+    const std::size_t n = P.size();
+    const long long nn = static_cast<long long>(n);
+    if (scratch_.size() < n * sizeof(RateFactors)) scratch_.resize(n * sizeof(RateFactors));
+    RateFactors* factors = reinterpret_cast<RateFactors*>(scratch_.data());
+    const bool pcisph = s_.pressure == PressureModel::Pcisph;  // its pressure force comes from its solve
+#pragma omp parallel for schedule(static)
+    for (long long q = 0; q < nn; ++q) {
+        const std::size_t i = static_cast<std::size_t>(q);
+        factors[i] = RateFactors{pcisph ? 0.0 : P.p[i] / (P.rho[i] * P.rho[i]), 1.0 / P.rho[i]};
+    }
+    return factors;
+}
+
+double Simulation2D::boundary_density(double p) const {
+    if (s_.pressure == PressureModel::Pcisph) return s_.rho0;
+    return s_.pressure == PressureModel::Wcsph ? tait_.density(p) : standard_.density(p);
+}
+
+// A coupling window starts: the solid particles take the new window's kinematics, and the rates that start
+// the window's first step must be those of the new window's wall acceleration.
+//
+// Why. The rates at the window start were evaluated at the end of the previous window (for the dt_wanted
+// of the reply, or by velocity Verlet's closing evaluation) and are kept as fresh: the particles have not
+// moved since. But they were evaluated with the previous window's kinematics, and one thing in them depends
+// on the window: the Adami wall pressure of a solid particle, p_w = (sum_f p_f W + (g - a_w) . sum_f rho_f
+// (x_w - x_f) W) / sum_f W, holds the solid's acceleration a_w = (v1 - v0) / dt over the window (the
+// interface moves with a constant acceleration between the window-start and window-end velocities). With
+// the stale rates, the first step of a window, and with one fluid step per window (the thesis rule) the
+// whole window, pushed the fluid and reported the force with the previous window's a_w: the fluid's force
+// did not depend on this window's structure iterate at all, an implicit coupling converged in one update
+// and it felt the fluid's added mass one window late, which is no more stable than an explicit scheme
+// (docs/validation.md, "Added mass").
+//
+// What is right. In the semi-implicit (symplectic) Euler step v^{n+1} = v^n + dt a(x^n), the fluid next to
+// the wall must accelerate with the wall over the same step: the pressure's wall condition
+// dp/dn = rho (g - a_w) . n is the step's Neumann condition, and a_w is the wall's velocity change over
+// this step, (v1 - v0) / dt of the window the step lies in. The positions and velocities of the solid at
+// the step's start are the window's start values, known before the window. So the force of the window is
+// evaluated at the start-of-window state with the window's own (iterated) wall acceleration; the same rates
+// kick the fluid, so the force reported is still exactly minus the fluid's momentum change from the solids
+// (momentum is conserved across the interface), and after RESTORE each iterate gets its own a_w. (Reporting
+// the end-of-window force instead would make the force depend on the iterate too, but it is not the force
+// that moved the fluid.) The wall acceleration term is the instantaneous part of the added mass: about the
+// fluid within a kernel support of the wall, which is also what a compressible fluid can add within one
+// step (rho_f c dt with dt = CFL h / c).
+//
+// How. Only the solids' extrapolated pressure and density change, so only the solid particles and the fluid
+// particles within a support of one are recomputed, each exactly as a full evaluation would (same state,
+// same neighbour order); for symplectic Euler and predictor-corrector nothing else has changed since the
+// end-of-window evaluation, so the rates are those of a full evaluation at a fraction of its cost. (Velocity Verlet's closing evaluation saw v^{n+1/2}; the recomputed particles see v^{n+1}, as
+// a full evaluation at the window start would.) With the pressure correction the solids' densities also
+// enter the matrices L of their fluid neighbours, and through the pair terms (L_i + L_j)/2 the rates of those
+// neighbours' neighbours: that second ring is recomputed too (tests/fluid/test_adapter.cpp compares the
+// shortcut with a full evaluation bit for bit). With dummy walls (no a_w in the wall pressure) and PCISPH
+// (a_w enters its pressure solve, which reads it from solid_acc_) nothing else needs recomputing.
+void Simulation2D::refresh_solid_rates() {
+    if (n_solid_ == 0 || !kinematics_ || !st_.rates_fresh) return;  // else the first step evaluates anyway
+    auto& P = st_.P;
+    const std::size_t n = P.size();
+    solid_xv_.clear();
+    for (std::size_t i = 0; i < n; ++i)
+        if (P.kind[i] == Kind::Solid) {
+            solid_xv_.push_back(P.x[i]);
+            solid_xv_.push_back(P.v[i]);
+        }
+    move_solids(st_.t);
+    bool same = true;
+    for (std::size_t i = 0, k = 0; i < n && same; ++i)
+        if (P.kind[i] == Kind::Solid) {
+            same = P.x[i] == solid_xv_[k] && P.v[i] == solid_xv_[k + 1];
+            k += 2;
+        }
+    if (!same) {  // the window does not start where the last one ended (not the case in a coupled run)
+        evaluate();
+        return;
+    }
+    if (s_.wall == WallModel::Dummy || s_.pressure == PressureModel::Pcisph) return;
+    near_solid_.assign(n, 0);
+    with_kernels<Dim>(s_.kernel, h_, [&](const auto& kw, const auto& kg) {
+        extrapolate_boundary_state(P, grid_, kw, rates_.gravity, s_.clamp_negative,
+                                   [&](double p) { return boundary_density(p); },
+                                   [&](std::uint32_t w) { return boundary_acceleration(w); }, true);
+        // Marks with `ring` each unmarked fluid particle within the support of a particle `source(i)` picks
+        // (a hair beyond the support: marking one too many costs nothing, it is recomputed to the same value).
+        const double R2 = grid_.radius2() * (1.0 + 1e-9);
+        auto mark_fluid_neighbours = [&](const auto& source, std::uint8_t ring) {
+            grid_.for_each_cell([&](std::uint32_t cell, std::uint32_t begin, std::uint32_t end) {
+                typename CellGrid<Dim>::Range ranges[CellGrid<Dim>::max_ranges];
+                int nr = -1;
+                for (std::uint32_t i = begin; i < end; ++i) {
+                    if (!source(i)) continue;
+                    if (nr < 0) nr = grid_.ranges(cell, ranges);
+                    for (int r = 0; r < nr; ++r)
+                        for (std::uint32_t f = ranges[r].begin; f < ranges[r].end; ++f)
+                            if (P.kind[f] == Kind::Fluid && !near_solid_[f] && norm2(P.x[i] - (P.x[f] + ranges[r].shift)) < R2)
+                                near_solid_[f] = ring;
+                }
+            });
+        };
+        // The solids and their fluid neighbours.
+        for (std::size_t i = 0; i < n; ++i)
+            if (P.kind[i] == Kind::Solid) near_solid_[i] = 1;
+        mark_fluid_neighbours([&](std::uint32_t i) { return P.kind[i] == Kind::Solid; }, 1);
+        if (s_.kernel_correction) {
+            // The solids' new densities change the matrices L of their fluid neighbours, and the pair terms
+            // (L_i + L_j)/2 of those neighbours' own neighbours with them: mark that second ring too.
+            mark_fluid_neighbours([&](std::uint32_t i) { return near_solid_[i] == 1 && P.kind[i] == Kind::Fluid; }, 2);
+            update_correction(kg);
+        }
+        // The factors of all particles: the buffer is scratch (the sort reuses it), not state.
+        compute_rates(P, grid_, kw, kg, ViscosityKernel<Dim>(h_), fill_rate_factors(), rates_, nullptr,
+                      near_solid_.data());
+        if (surface_.on()) apply_surface_stress(P, grid_, kg, mass_, surface_, near_solid_.data());
+    });
+    reduce_rates();
+}
+
+void Simulation2D::reduce_rates() {
+    const auto& P = st_.P;
+    double a2 = 0.0, u2 = 0.0, rho_max = 0.0;
+    bool finite = true;
+    const long long n = static_cast<long long>(P.size());
+#pragma omp parallel for schedule(static) reduction(max : a2, u2, rho_max) reduction(&& : finite)
+    for (long long q = 0; q < n; ++q) {
+        const std::size_t i = static_cast<std::size_t>(q);
+        if (P.kind[i] != Kind::Fluid) continue;
+        const double ai = norm2(P.a[i]), ui = norm2(P.v[i]);
+        finite = finite && std::isfinite(ai) && std::isfinite(ui) && std::isfinite(P.rho[i]);
+        a2 = std::max(a2, ai);
+        u2 = std::max(u2, ui);
+        rho_max = std::max(rho_max, P.rho[i]);
+    }
+    if (!finite) {
+        for (std::size_t i = 0; i < P.size(); ++i) {
+            if (P.kind[i] != Kind::Fluid) continue;
+            if (!all_finite(P.a[i])) fail(i, "acceleration", norm(P.a[i]), "not finite");
+            if (!all_finite(P.v[i])) fail(i, "velocity", norm(P.v[i]), "not finite");
+            if (!std::isfinite(P.rho[i])) fail(i, "density", P.rho[i], "not finite");
+        }
+    }
+    st_.a_max = std::sqrt(a2);
+    st_.u_max = std::sqrt(u2);
+    st_.rho_max = rho_max;
+}
+
+double Simulation2D::stable_dt() {
+    if (!st_.rates_fresh) evaluate();
+    double c = 0.0;
+    if (s_.pressure == PressureModel::Wcsph) c = tait_.sound_speed(std::max(st_.rho_max, s_.rho0));
+    if (s_.pressure == PressureModel::Standard) c = standard_.sound_speed(st_.rho_max);
+    double a = st_.a_max;
+    if (s_.pressure == PressureModel::Pcisph) a = std::max(a, st_.a_max_last);
+    const double nu = (s_.viscosity == ViscosityModel::Morris || s_.viscosity == ViscosityModel::Mueller) ? s_.nu : 0.0;
+    StableStep ss = stable_step(limits_, h_, c, st_.u_max, a, nu);
+    // PCISPH has no sound speed in its CFL condition, so at cfl near 1 a particle would move about h per
+    // step, beyond the reach of the neighbour lists its prediction uses (step_pcisph). The step aims at
+    // pcisph_step_reach of the support, under the pcisph_reach that step_pcisph accepts: the margin is for
+    // the part of the motion the step's acceleration adds. (WCSPH and standard SPH steps are bounded far
+    // below that by c.)
+    if (s_.pressure == PressureModel::Pcisph && st_.u_max > 0.0) {
+        const double reach_dt = pcisph_step_reach * support_ / st_.u_max;
+        if (reach_dt < ss.dt) ss = {reach_dt, "PCISPH neighbour reach"};
+    }
+    if (!(ss.dt >= s_.dt_min)) {
+        step_dt_ = ss.dt;
+        throw SolverError("diverged", "step " + std::to_string(st_.step + 1) + ", t = " + fmt(st_.t) +
+                                          " s: time step = " + fmt(ss.dt) + " s (below the floor dt_min = " +
+                                          fmt(s_.dt_min) + " s; limited by " + ss.limited_by + ", largest |u| = " +
+                                          fmt(st_.u_max) + " m/s, largest |a| = " + fmt(a) + " m/s^2)");
+    }
+    return ss.dt;
+}
+
+}  // namespace sphfsi::fluid

@@ -1,0 +1,102 @@
+// Simulation2D: diagnostics of the state (free surface, energy, memory), the in-memory save/restore of
+// implicit coupling and the byte checkpoints that resume a run bit-identically.
+#include "sphfsi/fluid/simulation.hpp"
+
+#include "sphfsi/protocol/solver.hpp"
+
+namespace sphfsi::fluid {
+namespace {
+
+using protocol::SolverError;
+
+constexpr std::uint64_t checkpoint_magic = 0x3146495346485053ULL;  // "SPHFSIF1"
+
+}  // namespace
+
+std::size_t Simulation2D::free_surface_count() const {
+    const auto& P = st_.P;
+    const float threshold = static_cast<float>(s_.surface_threshold);
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < P.size(); ++i) n += P.kind[i] == Kind::Fluid && P.div_r[i] < threshold;
+    return n;
+}
+
+Simulation2D::Energy Simulation2D::mechanical_energy() const {
+    const auto& P = st_.P;
+    V g{};
+    for (int k = 0; k < Dim; ++k) g[k] = s_.gravity[static_cast<std::size_t>(k)];
+    Energy e;
+    for (std::size_t i = 0; i < P.size(); ++i) {
+        if (P.kind[i] != Kind::Fluid) continue;
+        e.kinetic += 0.5 * mass_ * norm2(P.v[i]);
+        e.potential -= mass_ * dot(g, P.x[i]);
+    }
+    return e;
+}
+
+std::size_t Simulation2D::memory_bytes() const {
+    return st_.P.memory_bytes() + (has_saved_ ? saved_.P.memory_bytes() : 0) + grid_.memory_bytes() +
+           order_.capacity() * sizeof(std::uint32_t) + scratch_.capacity() + rho_scratch_.capacity() * sizeof(double) +
+           pci_.memory_bytes() + correction_.capacity() * sizeof(Mat<Dim>);
+}
+
+void Simulation2D::save() {
+    saved_ = st_;
+    has_saved_ = true;
+}
+
+void Simulation2D::restore() {
+    if (!has_saved_) throw SolverError("bad_state", "RESTORE before any SAVE");
+    st_ = saved_;
+    sort_particles();  // the grid belongs to the state it was built for; the saved particles are already in cell order
+}
+
+void Simulation2D::write_state(ByteWriter& w) const {
+    const auto& P = st_.P;
+    w.put(checkpoint_magic);
+    w.put<std::uint64_t>(P.size());
+    w.put<std::uint64_t>(n_fluid_);
+    w.put<std::uint64_t>(n_solid_);
+    w.put(st_.t);
+    w.put(st_.step);
+    w.put<std::uint8_t>(st_.rates_fresh ? 1 : 0);
+    w.put(st_.a_max);
+    w.put(st_.u_max);
+    w.put(st_.rho_max);
+    w.put(st_.a_max_last);
+    w.put(st_.escaped);
+    w.put_vector(P.x); w.put_vector(P.v); w.put_vector(P.rho); w.put_vector(P.id); w.put_vector(P.tag);
+    w.put_vector(P.kind); w.put_vector(P.a); w.put_vector(P.drho); w.put_vector(P.p); w.put_vector(P.v_visc);
+    w.put_vector(P.div_r);
+    w.put_vector(solid_acc_);
+    w.put_vector(st_.solid_force_sum);
+    w.put(st_.solid_weight);
+}
+
+void Simulation2D::read_state(ByteReader& r) {
+    auto& P = st_.P;
+    if (r.get<std::uint64_t>() != checkpoint_magic) throw SolverError("bad_config", "checkpoint: not a sphfsi-fluid state");
+    const auto n = r.get<std::uint64_t>(), nf = r.get<std::uint64_t>(), ns = r.get<std::uint64_t>();
+    if (n != P.size() || nf != n_fluid_ || ns != n_solid_)
+        throw SolverError("bad_config", "checkpoint: it holds " + std::to_string(n) + " particles (" + std::to_string(nf) +
+                                            " fluid, " + std::to_string(ns) + " solid) but this scene makes " +
+                                            std::to_string(P.size()) + " (" + std::to_string(n_fluid_) + ", " +
+                                            std::to_string(n_solid_) + "): resume with the scene that wrote it");
+    st_.t = r.get<double>();
+    st_.step = r.get<std::uint64_t>();
+    st_.rates_fresh = r.get<std::uint8_t>() != 0;
+    st_.a_max = r.get<double>();
+    st_.u_max = r.get<double>();
+    st_.rho_max = r.get<double>();
+    st_.a_max_last = r.get<double>();
+    st_.escaped = r.get<std::uint64_t>();
+    r.get_vector(P.x); r.get_vector(P.v); r.get_vector(P.rho); r.get_vector(P.id); r.get_vector(P.tag);
+    r.get_vector(P.kind); r.get_vector(P.a); r.get_vector(P.drho); r.get_vector(P.p); r.get_vector(P.v_visc);
+    r.get_vector(P.div_r);
+    r.get_vector(solid_acc_);
+    r.get_vector(st_.solid_force_sum);
+    st_.solid_weight = r.get<double>();
+    sort_particles();  // rebuild the grid for the restored positions (already in cell order: no reordering)
+}
+
+}  // namespace sphfsi::fluid
