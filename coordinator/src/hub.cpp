@@ -200,9 +200,12 @@ void Hub::file_reply(const std::string& role, Message m) {
 }
 
 void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) {
+    // A refusal echoes the stranger's own token (empty when unreadable), never this run's: the run token is
+    // the only thing keeping another local process from joining, so it must not be handed out on request.
+    std::string their_token;
     auto refuse = [&](std::uint64_t seq, const std::string& code, const std::string& why) {
         log_("refused a connection: " + why);
-        Message e = make_message(MessageType::Error, seq, token_, ErrorReply{code, why, seq});
+        Message e = make_message(MessageType::Error, seq, their_token, ErrorReply{code, why, seq});
         send_raw(id, e);
     };
     Message m;
@@ -212,6 +215,7 @@ void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) 
         if (!e.answerable()) return log_("ignored a malformed " + e.type_name() + " from an unknown connection");
         return refuse(e.seq(), e.code(), std::string("malformed first message: ") + e.what());
     }
+    their_token = m.token;
     if (!is_answered(m.type)) {  // once per connection: a stray peer's heartbeats would fill the log
         if (quiet_strangers_.insert(id).second)
             log_("ignored " + std::string(to_string(m.type)) + " from an unknown connection (further ones not logged)");

@@ -179,15 +179,18 @@ def test_stray_connection_is_refused_and_logged():
     assert stray.poll(5000), "no answer to a stray HELLO"
     reply = msgpack.unpackb(stray.recv(), raw=False)
     assert reply["type"] == "ERROR" and reply["body"]["code"] == "bad_token", reply
+    assert reply["token"] == "0" * 32, reply  # its own token echoed: the run's token is never handed out
     stray.send(b"\x00garbage")  # a stranger's garbage is refused too, and is not fatal
     assert stray.poll(5000)
-    assert msgpack.unpackb(stray.recv(), raw=False)["body"]["code"] == "bad_message"
+    reply = msgpack.unpackb(stray.recv(), raw=False)
+    assert reply["body"]["code"] == "bad_message" and reply["token"] == "", reply
     bad_hello = dict(hello, colour="blue")  # readable seq, a key HELLO does not have: refused by its seq
     stray.send(msgpack.packb({"v": 1, "type": "HELLO", "seq": 9, "token": "0" * 32, "body": bad_hello},
                              use_bin_type=True))
     assert stray.poll(5000)
     reply = msgpack.unpackb(stray.recv(), raw=False)
     assert reply["body"]["code"] == "bad_message" and reply["seq"] == 9 and reply["body"]["in_reply_to"] == 9, reply
+    assert reply["token"] in ("", "0" * 32), reply
     # An ERROR is never answered, not even a stranger's (an answer could start a ping-pong of ERRORs).
     stray.send(msgpack.packb({"v": 1, "type": "ERROR", "seq": 10, "token": "0" * 32,
                               "body": {"code": "internal", "message": "stray", "in_reply_to": 0}}, use_bin_type=True))
