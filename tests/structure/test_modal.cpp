@@ -79,4 +79,28 @@ TEST_CASE("an unsupported structure has three rigid-body modes first, also by su
     const double w = 4.73004 * 4.73004 * std::sqrt(EI / (rhoA * L * L * L * L));
     CHECK(rel(dense.omega(3), w) <= 5e-3);
 }
+
+TEST_CASE("rigid-body modes are counted from the supports at any mesh size, not from small eigenvalues") {
+    // A 400-element cantilever's lowest omega^2 is ~1e-12 of its highest: a "numerically zero" fraction
+    // of the highest (the old 1e-10 criterion) took its first modes for rigid-body ones and refused
+    // Rayleigh damping for lack of elastic modes. The count comes from which rigid motions the supports
+    // leave free: none when clamped, the rotation about a single pin, all three when free.
+    for (const auto& [support, rigid] : {std::pair<std::string, int>{"clamped", 0}, {"pinned", 1}, {"", 3}}) {
+        CAPTURE(support);
+        Value s = beam(400, support);
+        set(s, "damping", table({{"model", Value("rayleigh")}}));
+        const FrameDynamics f(config(s));
+        CHECK(f.modes().rigid_body == rigid);
+        CHECK(f.modes().omega2[rigid] > 0.0);  // the first mode past the rigid ones is elastic
+    }
+    // The fine cantilever's first three frequencies against the Euler-Bernoulli roots (as above, 0.5 %).
+    const FrameDynamics f(config(beam(400)));
+    for (int n = 0; n < 3; ++n) CHECK(rel(f.modes().omega(n), omega_exact(n)) <= 5e-3);
+    // Two separate free members: three rigid motions each.
+    Value two = beam(4, "");
+    sphfsi::set_path(two, "members", Value(Value::Array{
+        table({{"start", vec(0, 0)}, {"end", vec(L, 0)}, {"n_elements", Value(4)}}),
+        table({{"start", vec(0, 1)}, {"end", vec(L, 1)}, {"n_elements", Value(4)}})}));
+    CHECK(FrameDynamics(config(two)).modes().rigid_body == 6);
+}
 }
