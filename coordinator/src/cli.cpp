@@ -12,13 +12,14 @@ namespace sphfsi::coordinator {
 namespace {
 const char* kUsage =
     "usage:\n"
-    "  sphfsi run SCENE.toml --out DIR [--set key.path=value ...] [--listen ENDPOINT] [--quiet]\n"
+    "  sphfsi run SCENE.toml --out DIR [--overwrite] [--set key.path=value ...] [--listen ENDPOINT] [--quiet]\n"
     "  sphfsi run --resume DIR [--quiet]\n"
     "  sphfsi check SCENE.toml [--set key.path=value ...]\n"
     "  sphfsi schema            print every scene key as markdown (docs/scenes.md)\n"
     "  sphfsi version\n"
     "\n"
-    "run starts the participants the scene needs on 127.0.0.1 and records into DIR/record.h5.\n"
+    "run starts the participants the scene needs on 127.0.0.1 and records into DIR/record.h5;\n"
+    "a DIR that already holds a record is refused unless --overwrite is given.\n"
     "--listen tcp://ADDRESS:PORT binds there instead and waits for participants started elsewhere\n"
     "(a non-loopback address exposes the run to that network: an explicit choice).\n";
 
@@ -60,6 +61,8 @@ int main_cli(int argc, char** argv) {
             if (opt.resume) return usage_error("--resume is given twice");
             opt.resume = true;
             opt.out_dir = *v;
+        } else if (a == "--overwrite") {
+            opt.overwrite = true;
         } else if (a == "--quiet") {
             opt.quiet = true;
         } else if (!a.empty() && a[0] == '-') {
@@ -98,6 +101,7 @@ int main_cli(int argc, char** argv) {
         if (opt.resume && !opt.overrides.empty())
             return usage_error("--resume continues the run as it was; --set cannot change it (start a new run instead)");
         if (opt.resume && out_given) return usage_error("--resume DIR resumes in DIR; give no --out");
+        if (opt.resume && opt.overwrite) return usage_error("--resume continues the record in DIR; --overwrite would discard it");
         if (opt.out_dir.empty()) return usage_error("run needs --out DIR");
         opt.scene = scene;
         return run_scene(opt);

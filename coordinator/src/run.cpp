@@ -134,6 +134,14 @@ int Runner::execute() {
     }
     std::filesystem::create_directories(opt_.out_dir);  // only once the scene is known to be valid
     lock_ = std::make_unique<DirLock>(opt_.out_dir);
+    // An earlier run's record is only replaced on request: a re-run into the same folder that fails at once
+    // (a typo in --set, a participant that cannot start) would otherwise have cost the earlier results.
+    if (!resume && !opt_.overwrite && std::filesystem::exists(opt_.out_dir / "record.h5")) {
+        std::cerr << "sphfsi: " << opt_.out_dir.string() << " already holds a run's record (record.h5); pass "
+                  << "--overwrite to replace it, --resume " << opt_.out_dir.string()
+                  << " to continue it, or choose another --out" << std::endl;
+        return 2;
+    }
     if (!resume)  // a fresh run: what an earlier run left here must not be resumed or read as this run's
         for (const char* stale : {"checkpoint.bin", "record.xdmf", "watchpoints.csv", "record.h5.resuming"})
             std::filesystem::remove(opt_.out_dir / stale);

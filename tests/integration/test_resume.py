@@ -131,13 +131,14 @@ def test_a_resume_stopped_at_any_moment_keeps_the_history():
 
 
 def test_a_fresh_run_leaves_nothing_of_an_earlier_run_to_resume():
-    """A fresh run into a directory removes the checkpoint an earlier run left there: resuming from it would
-    glue the earlier run's state onto this run's record (before 2026-11-25 it did, with status "completed")."""
+    """A fresh run over an earlier one (--overwrite) removes the checkpoint the earlier run left there: resuming
+    from it would glue the earlier run's state onto this run's record (before 2026-11-25 it did, with status
+    "completed")."""
     out = harness.out_dir("fresh-over-old")
     harness.sphfsi("run", SCENE, "--out", out, "--quiet", "--set", "run.end_time=1.0", "--set",
                    "run.checkpoint_interval=0.5", check=0, timeout=60)
     assert os.path.exists(os.path.join(out, "checkpoint.bin"))
-    harness.sphfsi("run", SCENE, "--out", out, "--quiet", "--set", "run.end_time=0.05", "--set",
+    harness.sphfsi("run", SCENE, "--out", out, "--quiet", "--overwrite", "--set", "run.end_time=0.05", "--set",
                    "run.output_interval=0.01", check=0, timeout=60)  # ends before its first checkpoint
     assert not os.path.exists(os.path.join(out, "checkpoint.bin"))
     code, text = harness.sphfsi("run", "--resume", out)

@@ -48,6 +48,23 @@ def test_set_override_changes_the_run():
         assert "load.force" in f.attrs["overrides"]
 
 
+def test_an_earlier_record_is_replaced_only_on_request():
+    out = harness.out_dir("plate-again")
+    harness.sphfsi("run", SCENE, "--out", out, "--quiet", "--set", "run.end_time=0.5", check=0)
+    kept = {name: open(os.path.join(out, name), "rb").read() for name in ("record.h5", "watchpoints.csv", "run.log")}
+    # A re-run into the same folder is refused before it touches anything: it might fail at once (a participant
+    # that cannot start), and the first run's files would be gone.
+    code, text = harness.sphfsi("run", SCENE, "--out", out, "--quiet", "--set", "run.end_time=0.25")
+    assert code == 2 and "already holds a run's record" in text and "--overwrite" in text, text
+    for name, content in kept.items():
+        assert open(os.path.join(out, name), "rb").read() == content, name
+    harness.sphfsi("run", SCENE, "--out", out, "--quiet", "--overwrite", "--set", "run.end_time=0.25", check=0)
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert f.attrs["status"] == "completed" and abs(f["frames/structure/time"][-1] - 0.25) < 1e-12
+    code, text = harness.sphfsi("run", "--resume", out, "--overwrite")
+    assert code == 2 and "--overwrite would discard it" in text, text
+
+
 def test_check_validates_without_running():
     code, text = harness.sphfsi("check", SCENE)
     assert code == 0 and "valid" in text, text

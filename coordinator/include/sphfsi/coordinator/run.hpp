@@ -12,6 +12,7 @@ struct RunOptions {
     std::filesystem::path out_dir;         // record.h5, record.xdmf, watchpoints.csv, run.log, checkpoint
     std::string listen;                    // non-empty: bind here and wait for remote participants
     bool resume = false;                   // continue from out_dir/checkpoint.bin
+    bool overwrite = false;                // a fresh run may replace the record an earlier run left in out_dir
     bool quiet = false;                    // no progress line
 };
 
