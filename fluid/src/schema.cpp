@@ -3,8 +3,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
+#include "sphfsi/fluid/footprint.hpp"
 #include "sphfsi/fluid/kernel_names.hpp"
 
 namespace sphfsi::fluid {
@@ -154,9 +156,37 @@ void check_combinations(const Value& fluid, const std::string& path, Errors& err
         errors.add(&time, "key '" + key(path, "time.dt_max") + "': below time.dt_min");
 }
 
+std::string sci(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.3g", v);
+    return buf;
+}
+
+// A spacing whose particles cannot be held is refused here, naming dp, rather than failing minutes into the
+// setup with std::bad_alloc. The coordinator and the participant each check against their own machine's
+// physical memory (a participant started elsewhere with --listen may have more).
+void check_footprint(const Value& fluid, const std::string& path, Errors& errors) {
+    const Footprint f = estimate_footprint(fluid);
+    const double memory = physical_memory_bytes();
+    const double over_memory = memory > 0 ? f.bytes() / memory : 0.0, over_count = f.particles / kMaxParticles;
+    if (over_memory <= 1.0 && over_count <= 1.0) return;
+    std::string why;
+    if (over_memory > 1.0) why += "; this machine has " + sci(memory / 1e9) + " GB of memory";
+    if (over_count > 1.0) why += "; particle indices are 32-bit (at most " + sci(kMaxParticles) + " particles)";
+    const double dp = num(fluid, "dp");
+    // The water's area dominates what a fine spacing lays out: the count goes as 1/dp^2.
+    errors.add(&fluid.at("dp"), "key '" + key(path, "dp") + "': " + sci(dp) + " m lays out about " + sci(f.particles) +
+                                    " particles (and " + sci(f.cells) + " grid cells), about " + sci(f.bytes() / 1e9) +
+                                    " GB at " + sci(kBytesPerParticle) + " B a particle" + why +
+                                    "; allowed: dp of about " + sci(dp * std::sqrt(std::max(over_memory, over_count)) * 1.01) +
+                                    " m or more for this geometry");
+}
+
 TableSchema build() {
     TableSchema s("The SPH fluid participant (sphfsi-fluid). SI units; 2D, quantities per metre of depth.");
-    s.number("dp", "initial particle spacing; sets particle size and mass rho0 * dp^2").unit("m").greater_than(0).required();
+    s.number("dp", "initial particle spacing; sets particle size and mass rho0 * dp^2. A spacing whose particles "
+                   "(about 600 B each, coordinator included) exceed this machine's memory is refused")
+        .unit("m").greater_than(0).required();
     s.number("h_over_dp", "smoothing length h in units of dp; the support radius is 2h (3h for \"gaussian\"). 1.5: Wendland gradients on the initial lattice are consistent to 0.3 % and 3 wall layers cover the support")
         .at_least(1.0).at_most(4.0).fallback(1.5);
     s.choice("kernel", {"mueller", "poly6", "spiky", "cubic_spline", "wendland", "gaussian"},
@@ -316,6 +346,7 @@ TableSchema build() {
         check_boxes_inside_tank(full, path, errors);
         check_gate(full, path, errors);
         check_combinations(full, path, errors);
+        check_footprint(full, path, errors);
     });
     return s;
 }

@@ -10,7 +10,11 @@
 
 #include "run_helpers.hpp"
 #include "scenes.hpp"
+#include "sphfsi/fluid/footprint.hpp"
+#include "sphfsi/fluid/gate.hpp"
+#include "sphfsi/fluid/scene_setup.hpp"
 #include "sphfsi/fluid/schema.hpp"
+#include "sphfsi/fluid/settings.hpp"
 
 using namespace fluid_test;
 using sphfsi::fluid::Kind;
@@ -140,6 +144,33 @@ TEST_SUITE("scene") {
         CHECK(rho_min < 0.7 * 1000.0);
         CHECK(rho_min > 0.24 * 1000.0);
         CHECK(crossings == 0);
+    }
+
+    TEST_CASE("the memory estimate counts the particles the lattice lays out, and a spacing too fine is refused") {
+        // Exact for every geometry option: the estimate must not drift from scene_setup's layout.
+        const Value scenes[] = {
+            dam_break(0.004),
+            with(water_tank(0.005, 0.1, 0.1, 0.1, 0.06), {{"periodic", "x"}, {"tank.closed_top", true}}),
+            with(dam_break(0.004), {{"tank.closed_top", true}, {"tank.wall_layers", 4}}),
+            with(water_tank(0.004, 0.4, 0.3, 0.1, 0.2), {{"gate.x0", 0.1}, {"gate.lift_speed", 1.0}}),
+        };
+        for (const Value& raw : scenes) {
+            const Value f = sphfsi::fluid::validate_scene(raw);
+            const auto built = sphfsi::fluid::build_scene(sphfsi::fluid::read_settings(f));
+            const std::size_t gate = sphfsi::fluid::gate_particles(sphfsi::fluid::read_settings(f)).size();
+            CHECK(sphfsi::fluid::estimate_footprint(f).particles == static_cast<double>(built.particles.size() + gate));
+        }
+        Value obstacle = dam_break(0.004);
+        obstacle.as_table_mut()["obstacle"] = Value(Value::Array{box(0.3, 0.0, 0.024, 0.048)});
+        const Value f = sphfsi::fluid::validate_scene(obstacle);
+        CHECK(sphfsi::fluid::estimate_footprint(f).particles ==
+              static_cast<double>(sphfsi::fluid::build_scene(sphfsi::fluid::read_settings(f)).particles.size()));
+        // 0.1 x 0.2 m of water at dp = 0.1 um is 2e12 particles: more than any machine holds and than 32-bit
+        // indices count. The error names the key and a spacing that would fit.
+        const std::string p = problems(with(dam_break(0.004), {{"dp", 1e-7}}));
+        CHECK(p.find("key 'fluid.dp': 1e-07 m lays out about 2e+12 particles") != std::string::npos);
+        CHECK(p.find("particle indices are 32-bit") != std::string::npos);
+        CHECK(p.find("allowed: dp of about") != std::string::npos);
     }
 
     TEST_CASE("a closed box periodic in x keeps water at rest") {

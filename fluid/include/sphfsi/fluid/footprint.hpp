@@ -1,0 +1,32 @@
+#pragma once
+// What a [fluid] section will cost in memory before anything is allocated, so that a spacing too fine for
+// the machine is refused by the scene check, naming fluid.dp, instead of ending in std::bad_alloc (or the
+// kernel's out-of-memory killer) minutes into setting up the lattice.
+#include "sphfsi/protocol/value.hpp"
+
+namespace sphfsi::fluid {
+
+// Peak resident bytes per particle of a run on one machine, rounded up: the solver's arrays are 160 - 172 B
+// (docs/benchmarks.md, "memory per particle"); the participant with its FRAME messages peaked at 385 B and the
+// coordinator recording them at 175 B (slopes of VmHWM between 205k and 800k particles, dam break, WCSPH,
+// 2026-11-26), 560 B together.
+constexpr double kBytesPerParticle = 600.0;
+// The neighbour grid holds one 4-byte cell start per cell of one support radius.
+constexpr double kBytesPerCell = 4.0;
+// Particle indices are 32-bit (neighbour lists, the cell order).
+constexpr double kMaxParticles = 4.0e9;
+
+struct Footprint {
+    double particles = 0;  // fluid, tank walls, obstacles and gate, as the lattice lays them out
+    double cells = 0;      // neighbour-grid cells over the tank, its walls and the head room above an open top
+    double bytes() const { return particles * kBytesPerParticle + cells * kBytesPerCell; }
+};
+
+// From a section with its defaults filled in (with_defaults). Counts in doubles, so absurd spacings do
+// not overflow.
+Footprint estimate_footprint(const sphfsi::Value& fluid);
+
+// This machine's physical memory [bytes] (0 if unknown).
+double physical_memory_bytes();
+
+}  // namespace sphfsi::fluid

@@ -1,0 +1,56 @@
+#include "sphfsi/fluid/footprint.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "sphfsi/fluid/kernel_names.hpp"
+#include "sphfsi/fluid/schema.hpp"
+
+namespace sphfsi::fluid {
+namespace {
+
+double num(const sphfsi::Value& t, std::string_view k) { return t.at(k).as_double(); }
+
+// As scene_setup's count_along: at least one particle along any length.
+double along(double length, double dp) { return std::max(1.0, std::round(length / dp)); }
+
+}  // namespace
+
+Footprint estimate_footprint(const sphfsi::Value& fluid) {
+    const sphfsi::Value& tank = fluid.at("tank");
+    const double dp = num(fluid, "dp"), W = num(tank, "width"), H = num(tank, "height");
+    const double layers = static_cast<double>(tank.at("wall_layers").as_int());
+    const std::string periodic = fluid.at("periodic").as_string();
+    const bool walls_x = periodic != "x" && periodic != "xy", floor = periodic != "y" && periodic != "xy";
+    const bool lid = floor && tank.at("closed_top").as_bool();
+
+    Footprint f;
+    double water_top = 0;
+    for (const char* list : {"water", "obstacle"})
+        if (const sphfsi::Value* boxes = fluid.find(list))
+            for (const sphfsi::Value& b : boxes->as_array()) {
+                f.particles += along(num(b, "width"), dp) * along(num(b, "height"), dp);
+                if (std::string_view(list) == "water") water_top = std::max(water_top, num(b, "y0") + num(b, "height"));
+            }
+    const double row = along(W, dp) + (walls_x ? 2 * layers : 0);
+    f.particles += layers * row * ((floor ? 1 : 0) + (lid ? 1 : 0)) + (walls_x ? 2 * layers * along(H, dp) : 0);
+    if (fluid.find("gate")) {
+        const GateBox g = gate_box(fluid);
+        f.particles += along(g.thickness, dp) * along(g.height, dp);
+    }
+
+    const double support = dp * num(fluid, "h_over_dp") * kernel_support_factor(fluid.at("kernel").as_string());
+    const double wall = layers * dp, head = lid ? wall : std::max(H, water_top);
+    const double width = W + (walls_x ? 2 * wall : 0), height = H + (floor ? wall + head : 0);
+    f.cells = std::ceil(width / support) * std::ceil(height / support);
+    return f;
+}
+
+double physical_memory_bytes() {
+    const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+    return pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page) : 0.0;
+}
+
+}  // namespace sphfsi::fluid
