@@ -570,6 +570,19 @@ std::string encode(const Message& m) {
 
 namespace {
 
+// The envelope's type as written, without reading the envelope (empty if unreadable): a HEARTBEAT or ERROR
+// whose seq is missing or broken is still a message that is never answered.
+std::string peek_type(const msgpack::object& envelope) {
+    if (envelope.type != msgpack::type::MAP) return {};
+    for (std::uint32_t i = 0; i < envelope.via.map.size; ++i) {
+        const auto& kv = envelope.via.map.ptr[i];
+        if (kv.key.type == msgpack::type::STR && std::string_view(kv.key.via.str.ptr, kv.key.via.str.size) == "type" &&
+            kv.val.type == msgpack::type::STR)
+            return std::string(kv.val.via.str.ptr, kv.val.via.str.size);
+    }
+    return {};
+}
+
 // The envelope's fields after seq, and the body; `type` is set as soon as it is read.
 void read_envelope_rest(MapReader& env, Message& m, std::string& type) {
     type = need_string(env.need("type"), "envelope.type");
@@ -608,7 +621,11 @@ Message decode(const void* data, std::size_t size, const DecodeLimits& limits) {
     MapReader env(oh.get(), "envelope");
     Message m;
     // seq first, so that the refusal of a message whose seq is readable answers it by that seq.
-    m.seq = need_uint(env.need("seq"), "envelope.seq");
+    try {
+        m.seq = need_uint(env.need("seq"), "envelope.seq");
+    } catch (const ProtocolError& e) {
+        throw ProtocolError(e.code(), e.what(), 0, peek_type(oh.get()));
+    }
     std::string type;
     try {
         read_envelope_rest(env, m, type);

@@ -144,6 +144,20 @@ TEST_CASE("a refusal names the offending message's seq where it could be read, e
     pk.pack("seq");
     pk.pack("seven");  // a seq that is not a number cannot be answered by
     CHECK(seq_of(std::string(buf.data(), buf.size())) == 0);
+    // Nor is a HEARTBEAT or ERROR without a readable seq answered (its type says what it is); a request
+    // without one is, by seq 0.
+    for (const char* type : {"HEARTBEAT", "ERROR", "ADVANCE"}) {
+        msgpack::sbuffer b;
+        Packer p(b);
+        p.pack_map(2);
+        p.pack("type");
+        p.pack(type);
+        p.pack("seq");
+        p.pack("seven");
+        const auto e = refusal(std::string(b.data(), b.size()));
+        CHECK(e.seq() == 0);
+        CHECK(e.answerable() == (std::string(type) == "ADVANCE"));
+    }
 }
 
 TEST_CASE("arrays whose bytes do not match their shape or dtype are refused") {
