@@ -25,14 +25,21 @@ namespace {
 
 std::string quoted(const std::string& name) { return "'" + protocol::printable(name, 64) + "'"; }
 
-void check_info_keys(const std::string& prefix, const Value& v) {
-    if (!v.is_table()) return;
+// Returns how many entries the (nested) table holds.
+std::size_t check_info_keys(const std::string& prefix, const Value& v, std::size_t seen = 0) {
+    if (!v.is_table()) return seen;
     for (const auto& [k, x] : v.as_table()) {
         if (!plain_name(k))
             throw RecordRefused("sent READY info key " + quoted(prefix + k) +
                                 ", which is not a plain name (" + kPlainNameRule + ")");
-        check_info_keys(prefix + k + ".", x);
+        if (++seen > kMaxInfoEntries)
+            throw RecordRefused("sent more than " + std::to_string(kMaxInfoEntries) + " READY info entries");
+        if (x.is_string() && x.as_string().size() > kMaxInfoString)
+            throw RecordRefused("sent READY info " + quoted(prefix + k) + " of " + std::to_string(x.as_string().size()) +
+                                " bytes; at most " + std::to_string(kMaxInfoString));
+        seen = check_info_keys(prefix + k + ".", x, seen);
     }
+    return seen;
 }
 
 void write_value_attributes(hid_t object, const std::string& prefix, const Value& v) {
@@ -182,12 +189,18 @@ void Recorder::set_interface(const protocol::InterfaceMesh& mesh) {
     series("/interface/cells", {4}, true, mesh.cells.rows()).append(mesh.cells.values.data(), mesh.cells.rows());
 }
 
-void Recorder::append_window(const std::vector<std::pair<std::string, double>>& columns,
-                             const protocol::F64Array* displacement, const protocol::F64Array* force) {
+std::vector<std::string> Recorder::append_window(const std::vector<std::pair<std::string, double>>& columns,
+                                                 const protocol::F64Array* displacement, const protocol::F64Array* force) {
     if (window_columns_.empty()) {
         for (const auto& [name, v] : columns) window_columns_.push_back(name);
         window_buffer_.resize(window_columns_.size());
     }
+    std::vector<std::string> unrecorded;
+    for (std::size_t i = 0; i < columns.size(); ++i)
+        if ((i >= window_columns_.size() || columns[i].first != window_columns_[i]) &&
+            std::find(window_columns_.begin(), window_columns_.end(), columns[i].first) == window_columns_.end() &&
+            unrecorded_columns_.insert(columns[i].first).second)
+            unrecorded.push_back(columns[i].first);
     // The columns are those of the first window; a later window's extra names are dropped and its
     // missing ones recorded as NaN, so every column keeps one row per window.
     for (std::size_t i = 0; i < window_columns_.size(); ++i) {
@@ -205,6 +218,7 @@ void Recorder::append_window(const std::vector<std::pair<std::string, double>>& 
     }
     // Bound memory between frames: write out long stretches without a frame.
     if (window_buffer_[0].size() >= 4096) flush();
+    return unrecorded;
 }
 
 void Recorder::append_frame(const std::string& role, double t, const protocol::Fields& fields) {

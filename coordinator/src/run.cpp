@@ -235,6 +235,8 @@ void Runner::initialise(std::optional<Checkpoint>& resume) {
         if (resume) req.state = resume->states.at(role);
         Message m = hub_->request(role, MessageType::Init, req);
         const auto& ready = m.as<InitReply>();
+        if (!(ready.dt_wanted > 0) || !std::isfinite(ready.dt_wanted))  // the first window is sized by it
+            throw ParticipantFailure(role, "garbage", "READY wants a step of " + seconds(ready.dt_wanted));
         if (role == "structure") {
             // A structure alone may have no wetted surface; coupled, the fluid needs one to push on.
             if (!ready.interface && coupled_)
@@ -420,7 +422,10 @@ void Runner::record_window(const WindowPlan& p, const WindowOutcome& o, double w
     };
     if (fluid_) add_stats("fluid", o.fluid.reply.stats);
     if (structure_) add_stats("structure", o.structure.reply.stats);
-    recorder_->append_window(row, structure_ ? &iface_.displacement : nullptr, structure_ ? &iface_.force : nullptr);
+    for (const auto& name : recorder_->append_window(row, structure_ ? &iface_.displacement : nullptr,
+                                                     structure_ ? &iface_.force : nullptr))
+        log("warning: window column '" + name + "' first appeared after the first window and is not recorded "
+            "(the columns are fixed by the first window)");
 }
 
 void Runner::snapshot_all() {

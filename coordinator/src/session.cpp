@@ -31,14 +31,23 @@ StepResult Session::finish_advance(const std::string& role, std::uint64_t seq) {
     if (!(r.reply.compute_s >= 0) || !std::isfinite(r.reply.compute_s))
         throw ParticipantFailure(role, "garbage", "reports a compute time of " + seconds(r.reply.compute_s));
     // Each becomes the window column ROLE.NAME in the record.
-    if (r.reply.stats.is_table())
+    if (r.reply.stats.is_table()) {
+        if (r.reply.stats.as_table().size() > kMaxStats)
+            throw ParticipantFailure(role, "garbage", "reports " + std::to_string(r.reply.stats.as_table().size()) +
+                                                          " stats; at most " + std::to_string(kMaxStats));
         for (const auto& [name, value] : r.reply.stats.as_table()) {
             if (!plain_name(name))
                 throw ParticipantFailure(role, "garbage", "reports stats '" + printable(name) +
                                                               "', which is not a plain name (" + kPlainNameRule + ")");
             if (!value.is_number())
                 throw ParticipantFailure(role, "garbage", "reports stats '" + name + "' that is not a number (ADVANCED stats: str -> number)");
+            // A NaN kinetic_energy would silently switch the energy checks off; any non-finite stat is a
+            // participant that blew up without saying so.
+            if (!std::isfinite(value.as_double()))
+                throw ParticipantFailure(role, "garbage", "reports stats '" + name + "' = " + std::to_string(value.as_double()) +
+                                                              ", not a finite number");
         }
+    }
     return r;
 }
 

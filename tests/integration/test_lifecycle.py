@@ -139,6 +139,24 @@ def test_frames_that_cannot_be_recorded_are_named():
     run_fault("info_bad_key", "error: structure sent READY info key ''", 5)
     run_fault("stats_text", "error: structure reports stats 'x' that is not a number", 5)
     run_fault("stats_bad_name", "error: structure reports stats 'a/b', which is not a plain name", 5)
+    # Bounds: a participant cannot make the record hold unbounded attributes or columns (200,000 info keys
+    # used to freeze the coordinator inside HDF5, deaf to SIGINT), nor switch the energy checks off with a NaN.
+    run_fault("info_huge", "error: structure sent more than 256 READY info entries", 5)
+    run_fault("stats_many", "error: structure reports 300 stats; at most 256", 5)
+    run_fault("stats_nan", "error: structure reports stats 'kinetic_energy' = nan, not a finite number", 5)
+    run_fault("ready_dt_zero", "error: structure READY wants a step of 0", 5)
+
+
+def test_a_stat_that_appears_late_is_named_not_recorded():
+    # The window columns are fixed by the first window (one dataset per name, a row per window): a stats
+    # name first sent later cannot be recorded, and the log says so once instead of dropping it silently.
+    out = harness.out_dir("stats-late")
+    code, text = harness.sphfsi("run", BAD, "--out", out, "--quiet", "--set", 'structure.mode="stats_late"', "--set",
+                                "run.end_time=0.05", "--set", "run.output_interval=0.01", timeout=30)
+    assert code == 0, text
+    assert text.count("window column 'structure.late' first appeared after the first window") == 1, text
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert f["windows/t"].shape[0] == 5 and "structure.late" not in f["windows"], list(f["windows"])
 
 
 def start_long(name, *extra):

@@ -20,8 +20,13 @@ section picks the fault:
   mode = "frame_changes"  sends field y in its first FRAME, y and zz in the next
   mode = "frame_empty"    sends a FRAME field of shape [0, 4294967296]
   mode = "info_bad_key"   sends READY info with a key ""
+  mode = "info_huge"      sends READY info with 200,000 keys
+  mode = "ready_dt_zero"  sends READY with dt_wanted 0
   mode = "stats_text"     reports ADVANCED stats with a string value
   mode = "stats_bad_name" reports ADVANCED stats named "a/b" (it would become an HDF5 group)
+  mode = "stats_nan"      reports ADVANCED stats kinetic_energy = NaN
+  mode = "stats_many"     reports 300 ADVANCED stats
+  mode = "stats_late"     reports the ADVANCED stat "late" from its second window on (not a fault)
   mode = "bad_exit"       answers BYE with ACK, then exits with status 5
   mode = "hang_snapshot"  never answers SNAPSHOT while its heartbeats go on
   mode = "stall"          never answers the first ADVANCE while its heartbeats go on, progress standing still
@@ -93,7 +98,8 @@ def main():
             continue
         if kind == "INIT":
             mode = body["config"].get("mode", mode)
-            send("READY", seq, {"dt_wanted": 0.01, "interface": mesh, "info": {"": 1} if mode == "info_bad_key" else {}})
+            info = {"": 1} if mode == "info_bad_key" else {f"k{i}": i for i in range(200000)} if mode == "info_huge" else {}
+            send("READY", seq, {"dt_wanted": 0.0 if mode == "ready_dt_zero" else 0.01, "interface": mesh, "info": info})
             if mode == "early":
                 zero = f8(4, [0.0] * 8)
                 send("ADVANCED", seq + 2, {"t": 1.0, "dt_wanted": 0.01, "outputs": {"displacement": zero, "velocity": zero},
@@ -121,7 +127,10 @@ def main():
                      {"t": now + 1.0 if mode == "wrong_time" else now, "dt_wanted": 0.01,
                       "outputs": {"displacement": zero, "velocity": zero},
                       "substeps": 1, "solver_iterations": 0, "compute_s": 0.0,
-                      "stats": {"x": "text"} if mode == "stats_text" else {"a/b": 1.0} if mode == "stats_bad_name" else {}})
+                      "stats": {"x": "text"} if mode == "stats_text" else {"a/b": 1.0} if mode == "stats_bad_name"
+                      else {"kinetic_energy": float("nan")} if mode == "stats_nan"
+                      else {f"s{i}": 1.0 for i in range(300)} if mode == "stats_many"
+                      else {"late": 1.0} if mode == "stats_late" and body["t"] > 0 else {}})
         elif kind == "SNAPSHOT" and mode == "hang_snapshot":
             time.sleep(3600)
         elif kind == "SNAPSHOT":

@@ -27,7 +27,13 @@ struct RunMetadata {
 // FRAME fields, READY info and ADVANCED stats, so the rule is checked, never assumed.
 bool plain_name(const std::string& name);
 // The rule, as the refusals state it.
-inline constexpr const char* kPlainNameRule = "letters, digits, _ - . +; not starting with '.'";
+inline constexpr const char* kPlainNameRule = "1 to 128 bytes of ASCII letters, digits, _ - . +; not starting with '.'";
+// Bounds on what a participant may ask the record to hold as attributes and window columns. HDF5 adds each
+// as an object-header entry at a cost that grows with those already there: 200,000 READY info keys froze the
+// coordinator (deaf to SIGINT, in the HDF5 library) for minutes. Ours send a dozen or two.
+inline constexpr std::size_t kMaxInfoEntries = 256;   // READY info entries, nested ones counted
+inline constexpr std::size_t kMaxInfoString = 4096;   // bytes of one READY info string
+inline constexpr std::size_t kMaxStats = 256;         // ADVANCED stats names per participant
 
 // What a participant sent cannot be recorded as it is (a field name HDF5 cannot hold, a field set or shape
 // that changed between frames, ...). Thrown before anything is written, so the record stays consistent; the
@@ -47,8 +53,10 @@ public:
     void set_participant(const std::string& role, const std::string& software, const Value& info);
     void set_interface(const protocol::InterfaceMesh& mesh);
 
-    // One coupling window: named scalar columns (the same names every call) and the interface state.
-    void append_window(const std::vector<std::pair<std::string, double>>& columns,
+    // One coupling window: named scalar columns and the interface state. The columns are those of the first
+    // window (an HDF5 dataset per name, a row per window): a later window's missing names are recorded as
+    // NaN, and names it adds are not recorded. Returns those added names, each only the first time it is seen.
+    std::vector<std::string> append_window(const std::vector<std::pair<std::string, double>>& columns,
                        const protocol::F64Array* displacement, const protocol::F64Array* force);
     // Throws RecordRefused, writing nothing, unless every name is a plain name (letters, digits, '_', '-',
     // '.', '+'; not starting with '.'; not "time", which the recorder writes) and the fields are those of the
@@ -72,6 +80,7 @@ private:
     h5::Handle h5_;
     std::map<std::string, h5::Series> series_;
     std::vector<std::string> window_columns_;
+    std::set<std::string> unrecorded_columns_;  // names first seen after the first window
     std::vector<std::vector<double>> window_buffer_;  // per column
     std::vector<double> disp_buffer_, force_buffer_;
     hsize_t interface_rows_buffered_ = 0;
