@@ -36,6 +36,8 @@ Value from_toml(const toml::node& node, const std::string& path) {
 }
 
 std::string read_file(const std::filesystem::path& file) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(file, ec)) throw ConfigError(file.string() + ": is a directory, not a scene file");
     std::ifstream in(file, std::ios::binary);
     if (!in) throw ConfigError(file.string() + ": cannot read the scene file");
     std::ostringstream s;
@@ -55,8 +57,12 @@ void apply_override(Value& root, const std::string& assignment) {
     try {
         auto doc = toml::parse("x = " + text);
         v = from_toml(*doc.get("x"), key);
-    } catch (const toml::parse_error&) {
-        v = Value(text);  // a bare word such as wcsph is meant as a string
+    } catch (const toml::parse_error& e) {
+        // A bare word such as wcsph is meant as a string; what starts like a number, array, table or quoted
+        // string and does not parse (1e400, [1, 2) is a mistake, not a string.
+        if (!text.empty() && std::string_view("0123456789+-[{\"'").find(text.front()) != std::string_view::npos)
+            throw ConfigError("--set " + assignment + ": the value is not valid TOML (" + std::string(e.description()) + ")");
+        v = Value(text);
     }
     v.line = 0;
     set_path(root, key, std::move(v));

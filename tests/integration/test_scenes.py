@@ -40,6 +40,11 @@ def test_bad_override_is_named():
     # A typo such as 1e-300 for 1e-3 would crawl while filling the disk: at most a million frames.
     code, text = harness.sphfsi("check", scene, "--set", "run.output_interval=1e-300")
     assert code == 2 and "key 'run.output_interval': must be at least run.end_time / 1e6" in text, text
+    # A number TOML cannot hold is a mistake, not the bare word "1e400" (which the schema called a string).
+    code, text = harness.sphfsi("check", scene, "--set", "run.end_time=1e400")
+    assert code == 2 and "--set run.end_time=1e400: the value is not valid TOML" in text, text
+    code, text = harness.sphfsi("check", scene, "--set", "load.force=[0.0, -200.0")
+    assert code == 2 and "the value is not valid TOML" in text, text
 
 
 def test_nothing_runs_on_an_invalid_scene():
@@ -52,6 +57,8 @@ def test_nothing_runs_on_an_invalid_scene():
 def test_missing_file_is_named():
     code, text = harness.sphfsi("check", "/nonexistent/scene.toml")
     assert code == 2 and "/nonexistent/scene.toml: cannot read the scene file" in text, text
+    code, text = harness.sphfsi("check", harness.SCENES)
+    assert code == 2 and "is a directory, not a scene file" in text, text
 
 
 if __name__ == "__main__":
