@@ -1,5 +1,7 @@
 #include "sphfsi/coordinator/watchpoints.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
@@ -12,6 +14,18 @@ Watchpoints::Watchpoints(const std::filesystem::path& file, const Value& scene, 
             Point p{w.at("name").as_string(), w.at("x").as_double(), w.at("y").as_double(), {}};
             p.where = protocol::locate(mesh, p.x, p.y);
             if (p.where.cell < 0) throw ConfigError("watchpoint '" + p.name + "': the structure publishes no interface cells");
+            // Outside its nearest cell the bilinear weights are clamped: the point follows the cell's nearest
+            // edge. Within one cell size that is still a point of the structure; farther, a typo.
+            double size = 0;
+            for (int i = 0; i < 4; ++i)
+                for (int j = i + 1; j < 4; ++j)
+                    size = std::max(size, std::hypot(mesh.vertices(p.where.vertex[i], 0) - mesh.vertices(p.where.vertex[j], 0),
+                                                     mesh.vertices(p.where.vertex[i], 1) - mesh.vertices(p.where.vertex[j], 1)));
+            if (p.where.distance > size)
+                throw ConfigError("watchpoint '" + p.name + "': (" + std::to_string(p.x) + ", " + std::to_string(p.y) +
+                                  ") m lies " + std::to_string(p.where.distance) +
+                                  " m from the structure's interface; allowed: within one cell size (" +
+                                  std::to_string(size) + " m) of it");
             points_.push_back(p);
         }
     }

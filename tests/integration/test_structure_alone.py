@@ -65,6 +65,14 @@ def test_an_earlier_record_is_replaced_only_on_request():
     assert code == 2 and "--overwrite would discard it" in text, text
 
 
+def test_a_watchpoint_off_the_structure_is_refused():
+    # Outside its nearest interface cell a point follows that cell's nearest edge; 49 m off is a typo, not a point
+    # of the structure, and used to be recorded as if it were one.
+    out = harness.out_dir("plate-far-watchpoint")
+    code, text = harness.sphfsi("run", SCENE, "--out", out, "--quiet", "--set", "watchpoint[0].x=50.0")
+    assert code != 0 and "watchpoint 'centre': (50.000000, 0.025000) m lies 49.000000 m from the structure's" in text, text
+
+
 def test_check_validates_without_running():
     code, text = harness.sphfsi("check", SCENE)
     assert code == 0 and "valid" in text, text
