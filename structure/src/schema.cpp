@@ -8,6 +8,10 @@
 namespace sphfsi::structure {
 namespace {
 
+// Coordinates beyond 1000 km are typos (1e300 passed the check and then failed the modal analysis with no
+// key named: element stiffnesses like EI / L^3 underflow); no structure this tool models comes near.
+constexpr double kFar = 1e6;
+
 using schema::Errors;
 using schema::TableSchema;
 
@@ -41,7 +45,8 @@ void add_history_keys(TableSchema& t) {
 }
 
 void add_point_load_keys(TableSchema& t) {
-    t.vector("at", 2, "where the load acts; must coincide with a node of some member").unit("m").required();
+    t.vector("at", 2, "where the load acts; must coincide with a node of some member").unit("m").at_least(-kFar).at_most(kFar)
+        .required();
     t.vector("force", 2, "force [Fx, Fy] in global axes, on the whole depth b").unit("N").fallback(Value::Array{0.0, 0.0});
     t.number("moment", "in-plane moment, counter-clockwise positive, on the whole depth b").unit("N m").fallback(0.0);
 }
@@ -207,8 +212,8 @@ TableSchema build() {
     auto& mem = s.table_array("members", "Straight members from start to end, meshed with n_elements equal "
                                          "elements. A member end that meets a node of another member is rigidly joined to it.");
     mem.string("name", "label used in messages");
-    mem.vector("start", 2, "first end point").unit("m").required();
-    mem.vector("end", 2, "second end point").unit("m").required();
+    mem.vector("start", 2, "first end point").unit("m").at_least(-kFar).at_most(kFar).required();
+    mem.vector("end", 2, "second end point").unit("m").at_least(-kFar).at_most(kFar).required();
     mem.integer("n_elements", "number of equal beam elements").at_least(1).at_most(100000).fallback(10);
     mem.boolean("wetted", "publish this member's faces (at +-t/2) as fluid interface").fallback(true);
     mem.vector("interface_padding", 2,
@@ -224,7 +229,7 @@ TableSchema build() {
     });
 
     auto& sup = s.table_array("supports", "Supports at nodes; nodes without one are free.");
-    sup.vector("at", 2, "the supported node").unit("m").required();
+    sup.vector("at", 2, "the supported node").unit("m").at_least(-kFar).at_most(kFar).required();
     sup.choice("type", {"clamped", "pinned", "roller", "free"},
                "clamped: ux, uy, theta fixed; pinned: ux, uy fixed; roller: motion along `normal` fixed; free: none")
         .required();

@@ -51,6 +51,10 @@ TEST_CASE("types, ranges and unknown keys are reported with their dotted path") 
     s = beam(10);
     s.as_table_mut().erase("material");
     CHECK(mentions(problem(s), "missing required key 'structure.material'"));
+    // A coordinator-sized typo: 1e300 used to pass and then fail the modal analysis naming no key.
+    s = beam(10);
+    set(s, "members[0].end", vec(1.0, 1e300));
+    CHECK(mentions(problem(s), "key 'structure.members[0].end': an entry is 1e+300; allowed: an array of 2 numbers, each >= -1e+06"));
 }
 
 TEST_CASE("supports and point loads must sit on nodes") {
