@@ -33,7 +33,7 @@ public:
     }
     InitReply init(const InitRequest& r) override {
         t_ = r.t0;
-        return InitReply{1.0, InterfaceMesh{F64Array({4, 2}, {0, 0, 1, 0, 1, 1, 0, 1}), I32Array({1, 4}, {0, 1, 2, 3})}, {}};
+        return InitReply{1.0, InterfaceMesh{F64Array({4, 2}, {0, 0, 1, 0, 1, 1, 0, 1}), I32Array({1, 4}, {0, 1, 2, 3})}, {}, {}};
     }
     AdvanceReply advance(const AdvanceRequest& r, Progress& p) override {
         p.tick();
@@ -116,7 +116,7 @@ void advance_roundtrip(const std::string& self, int repeats) {
                          [](const std::string&) {});
     launcher.start("structure", {self, "--participant", "--connect", hub.endpoint(), "--name", "structure"}, hub.token());
     hub.await_hellos({"structure"});
-    hub.request("structure", MessageType::Init, InitRequest{Value(Value::Table{}), 0.0, std::nullopt, {}});
+    hub.request("structure", MessageType::Init, InitRequest{Value(Value::Table{}), 0.0, std::nullopt, {}, {}});
     coordinator::Session session(hub);
     for (std::size_t n : {std::size_t{0}, std::size_t{1000}}) {
         Fields inputs;

@@ -41,6 +41,11 @@ std::string random_token() {
     return t;
 }
 
+bool at_rest_undeformed(const InterfaceState& s) {
+    auto zero = [](const F64Array& a) { return std::all_of(a.values.begin(), a.values.end(), [](double x) { return x == 0.0; }); };
+    return zero(s.displacement) && zero(s.velocity);
+}
+
 double cpu_seconds() {
     rusage u{};
     getrusage(RUSAGE_SELF, &u);
@@ -231,7 +236,17 @@ void Runner::initialise(std::optional<Checkpoint>& resume) {
         InitRequest req;
         req.config = scene_.section(role);
         req.t0 = t0_;
-        if (role == "fluid" && coupled_) req.interface = iface_.mesh;
+        if (role == "fluid" && coupled_) {
+            req.interface = iface_.mesh;
+            if (!resume && !at_rest_undeformed(iface_)) {
+                // The structure starts deformed or moving: the fluid must place its solid particles there.
+                if (hub_->peers().at("fluid").version < 2)
+                    throw ParticipantFailure("fluid", "bad_config",
+                                             "speaks protocol 1, which cannot start from the structure's deformed or "
+                                             "moving interface at t0 (protocol 2 passes it in INIT interface_state)");
+                req.interface_state = {{"displacement", iface_.displacement}, {"velocity", iface_.velocity}};
+            }
+        }
         if (resume) req.state = resume->states.at(role);
         Message m = hub_->request(role, MessageType::Init, req);
         const auto& ready = m.as<InitReply>();
@@ -244,6 +259,13 @@ void Runner::initialise(std::optional<Checkpoint>& resume) {
             InterfaceMesh mesh = ready.interface ? *ready.interface : InterfaceMesh{F64Array({0, 2}, {}), I32Array({0, 4}, {})};
             iface_.reset(mesh);
             recorder_->set_interface(mesh);
+            if (!ready.interface_state.empty()) {  // protocol 2: a deformed or moving start (else at rest, undeformed)
+                const auto n = iface_.vertices();
+                iface_.displacement = vertex_field(role, ready.interface_state, "displacement", n);
+                iface_.velocity = vertex_field(role, ready.interface_state, "velocity", n);
+                // Where the fluid will be told the interface is (INIT below), and no motion before t0 to extrapolate.
+                iface_.previous_displacement = iface_.fluid_displacement = iface_.displacement;
+            }
             structure_dt_ = ready.dt_wanted;
         } else {
             fluid_dt_ = ready.dt_wanted;

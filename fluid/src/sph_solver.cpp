@@ -1,6 +1,9 @@
 #include "sphfsi/fluid/sph_solver.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
 
 #include <omp.h>
@@ -15,13 +18,19 @@ using protocol::F64Array;
 using protocol::I32Array;
 using protocol::SolverError;
 
-// Point inside a quadrilateral cell (counter-clockwise; convex cells, as a beam mesh has).
-bool inside_quad(const std::array<Vec2, 4>& q, const Vec2& p) {
+// Distance from p to a quadrilateral cell (counter-clockwise; convex cells, as a beam mesh has); 0 inside.
+double distance_to_quad(const std::array<Vec2, 4>& q, const Vec2& p) {
+    bool inside = true;
+    double nearest = std::numeric_limits<double>::infinity();
     for (int k = 0; k < 4; ++k) {
         const Vec2 a = q[static_cast<std::size_t>(k)], b = q[static_cast<std::size_t>((k + 1) % 4)];
-        if ((b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]) < 0.0) return false;
+        const double ex = b[0] - a[0], ey = b[1] - a[1], px = p[0] - a[0], py = p[1] - a[1];
+        if (ex * py - ey * px < 0.0) inside = false;
+        const double len2 = ex * ex + ey * ey;
+        const double s = len2 > 0.0 ? std::clamp((px * ex + py * ey) / len2, 0.0, 1.0) : 0.0;
+        nearest = std::min(nearest, std::hypot(px - s * ex, py - s * ey));
     }
-    return true;
+    return inside ? 0.0 : nearest;
 }
 
 // The structure's mesh, in its reference position, must lie in the tank, walls included (a plate's ends may
@@ -106,25 +115,42 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
         } catch (const std::invalid_argument& e) {
             throw SolverError("bad_config", e.what());
         }
+        // Protocol 2: the structure may start deformed or moving (absent: undeformed, at rest).
+        for (const auto& [name, field] : request.interface_state)
+            if (name != "displacement" && name != "velocity")
+                throw SolverError("bad_message", "INIT interface_state has the field '" + name +
+                                                     "'; allowed: displacement, velocity");
+        const F64Array* u0 = find_f64(request.interface_state, "displacement");
+        const F64Array* v0 = find_f64(request.interface_state, "velocity");
+        InterfaceCoupling* coupling = &*coupling_;
+        try {
+            coupling->begin_window(request.t0, 0.0, u0, v0);
+        } catch (const std::invalid_argument& e) {
+            throw SolverError("bad_message", std::string("INIT interface_state: ") + e.what());
+        }
+        coupling->end_window();
+        // Water is cleared from the structure where it stands at t0, and from within dp/2 of its faces: a lattice
+        // laid against an undeformed face keeps its first row at exactly dp/2 (so nothing changes there), but
+        // a structure that starts deflected into the water would otherwise meet particles at a fraction of dp
+        // from its solid particles, which blew the first step up (elastic gate, mode-1 start).
+        const double clearance = 0.5 * settings_.dp * (1.0 - 1e-9);
         std::vector<std::array<Vec2, 4>> quads;
         const auto& mesh = *request.interface;
         for (std::size_t c = 0; c < mesh.cells.rows(); ++c) {
             std::array<Vec2, 4> q;
             for (int k = 0; k < 4; ++k) {
                 const auto v = static_cast<std::uint64_t>(mesh.cells(c, static_cast<std::uint64_t>(k)));
-                q[static_cast<std::size_t>(k)] = Vec2{{mesh.vertices(v, 0), mesh.vertices(v, 1)}};
+                q[static_cast<std::size_t>(k)] = Vec2{{mesh.vertices(v, 0) + (u0 ? (*u0)(v, 0) : 0.0),
+                                                       mesh.vertices(v, 1) + (u0 ? (*u0)(v, 1) : 0.0)}};
             }
             quads.push_back(q);
         }
-        InterfaceCoupling* coupling = &*coupling_;
-        coupling->begin_window(request.t0, 0.0, nullptr, nullptr);
-        coupling->end_window();
         sim_->add_solids(
             coupling->reference_positions(),
             [coupling](std::size_t k, double t, Vec2& x, Vec2& v, Vec2& a) { coupling->kinematics(k, t, x, v, a); },
-            [quads](const Vec2& p) {
+            [quads, clearance](const Vec2& p) {
                 for (const auto& q : quads)
-                    if (inside_quad(q, p)) return true;
+                    if (distance_to_quad(q, p) < clearance) return true;
                 return false;
             });
     }

@@ -138,6 +138,7 @@ void pack_bytes(Packer& pk, const std::vector<std::uint8_t>& b) { pk.bin(b.data(
 
 struct BodyPacker {
     Packer& pk;
+    std::uint32_t version;  // of the message: a body's keys depend on it (INIT, READY: interface_state from 2)
     void key(const char* k) { pk.pack(std::string_view(k)); }
     void operator()(const Empty&) { pk.pack_map(0); }
     void operator()(const Hello& h) {
@@ -156,17 +157,19 @@ struct BodyPacker {
         key("timeout_s"); pk.f64(w.timeout_s);
     }
     void operator()(const InitRequest& r) {
-        pk.pack_map(4);
+        pk.pack_map(version >= 2 ? 5 : 4);
         key("config"); pack_value(pk, r.config);
         key("t0"); pk.f64(r.t0);
         key("interface"); pack_mesh(pk, r.interface);
         key("state"); pack_bytes(pk, r.state);
+        if (version >= 2) { key("interface_state"); pack_fields(pk, r.interface_state); }
     }
     void operator()(const InitReply& r) {
-        pk.pack_map(3);
+        pk.pack_map(version >= 2 ? 4 : 3);
         key("dt_wanted"); pk.f64(r.dt_wanted);
         key("interface"); pack_mesh(pk, r.interface);
         key("info"); pack_value(pk, r.info.is_null() ? Value(Value::Table{}) : r.info);
+        if (version >= 2) { key("interface_state"); pack_fields(pk, r.interface_state); }
     }
     void operator()(const AdvanceRequest& r) {
         pk.pack_map(5);
@@ -395,7 +398,7 @@ Value read_table(const msgpack::object& o, const std::string& what) {
     return to_value(o, what);
 }
 
-Body read_body(MessageType type, const msgpack::object& o) {
+Body read_body(MessageType type, std::uint32_t version, const msgpack::object& o) {
     const std::string w = std::string(to_string(type)) + " body";
     MapReader m(o, w);
     Body body;
@@ -425,6 +428,7 @@ Body read_body(MessageType type, const msgpack::object& o) {
             r.t0 = need_double(m.need("t0"), w + ".t0");
             r.interface = read_mesh(m.need("interface"), w + ".interface");
             r.state = need_bytes(m.need("state"), w + ".state");
+            if (version >= 2) r.interface_state = read_fields(m.need("interface_state"), w + ".interface_state");
             body = std::move(r);
             break;
         }
@@ -433,6 +437,7 @@ Body read_body(MessageType type, const msgpack::object& o) {
             r.dt_wanted = need_double(m.need("dt_wanted"), w + ".dt_wanted");
             r.interface = read_mesh(m.need("interface"), w + ".interface");
             r.info = read_table(m.need("info"), w + ".info");
+            if (version >= 2) r.interface_state = read_fields(m.need("interface_state"), w + ".interface_state");
             body = std::move(r);
             break;
         }
@@ -564,7 +569,7 @@ std::string encode(const Message& m) {
     pk.pack(std::string_view("token"));
     pack_text(pk, m.token);
     pk.pack(std::string_view("body"));
-    std::visit(BodyPacker{pk}, m.body);
+    std::visit(BodyPacker{pk, m.version}, m.body);
     return std::move(pk.bytes());
 }
 
@@ -595,7 +600,7 @@ void read_envelope_rest(MapReader& env, Message& m, std::string& type) {
         throw ProtocolError("version_mismatch", "message speaks protocol version " + std::to_string(m.version) +
                                                     "; this side speaks " + std::to_string(kOldestSupportedVersion) +
                                                     " to " + std::to_string(kProtocolVersion));
-    m.body = read_body(m.type, env.need("body"));
+    m.body = read_body(m.type, m.version, env.need("body"));
     env.finish();
 }
 

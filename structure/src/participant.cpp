@@ -46,7 +46,15 @@ InitReply StructureSolver::init(const InitRequest& request) {
 
     InitReply reply;
     reply.dt_wanted = dt_wanted_;
-    if (interface_->vertex_count() > 0) reply.interface = interface_->mesh();
+    if (interface_->vertex_count() > 0) {
+        reply.interface = interface_->mesh();
+        // A deformed or moving start (structure.initial, or a resumed state) is passed on (protocol 2), so the
+        // fluid and the watchpoints see the structure where it is at t0, not undeformed.
+        const State& s = dynamics_->state();
+        if (!s.u.isZero(0.0) || !s.v.isZero(0.0))
+            reply.interface_state = {{"displacement", interface_->displacement(s.u)},
+                                     {"velocity", interface_->velocity(s.u, s.v)}};
+    }
     const Model& m = dynamics_->model();
     const Modes& modes = dynamics_->modes();
     Value::Table freqs;  // READY info holds numbers, strings, booleans and maps, no arrays

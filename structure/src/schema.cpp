@@ -299,9 +299,8 @@ TableSchema build() {
     newton.integer("load_steps", "static solves (initial equilibrium): load increments").at_least(1).at_most(10000)
         .fallback(10);
 
-    auto& init = s.table("initial", "Initial state at t0 (default: undeformed, at rest). The fluid and the watchpoints "
-                                    "see the interface undeformed until the first window ends (protocol 1 passes no "
-                                    "initial interface state; docs/protocol.md, READY)");
+    auto& init = s.table("initial", "Initial state at t0 (default: undeformed, at rest); READY passes the interface's "
+                                    "state at t0 on to the fluid and the watchpoints");
     init.boolean("static_equilibrium", "start from static equilibrium under the scene loads at t0 (and any preload)")
         .fallback(false);
     init.integer("mode", "start deflected in this natural mode (1 = fundamental), at rest; 0 = off").at_least(0)

@@ -246,6 +246,53 @@ def test_solid_particles_follow_the_structure():
     assert worst < 0.1 * dp
 
 
+def test_a_deformed_start_reaches_the_fluid_and_the_watchpoints_at_t0():
+    """protocol 2: a structure that starts deflected (structure.initial.mode) passes its interface state at t0
+    in READY, and the coordinator passes it on to the fluid in INIT. Before, both took the interface to be
+    undeformed at t0: the watchpoint read 0 and the solid particles jumped by the whole deflection at the end
+    of the first window."""
+    import numpy as np
+    out = harness.out_dir("deformed-start")
+    amplitude, dp = 0.004, 0.008  # half a spacing at the tip: the old jump fails the 0.1 dp bound below
+    harness.sphfsi("run", os.path.join(SCENARIOS, "elastic_obstacle.toml"), "--out", out, "--quiet",
+                   "--set", f"fluid.dp={dp}", "--set", "run.end_time=0.002", "--set", "run.output_interval=0.002",
+                   "--set", "structure.initial.mode=1", "--set", f"structure.initial.mode_amplitude={amplitude}",
+                   check=0, timeout=240)
+    with open(os.path.join(out, "watchpoints.csv")) as fh:
+        first = next(csv.DictReader(fh))
+    # The watchpoint is the cantilever's tip, where the mode's largest translation is: exactly the amplitude.
+    assert float(first["time"]) == 0 and abs(abs(float(first["dx"])) - amplitude) < 1e-12, first
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert f["frames/fluid/time"][0] == 0
+        # Where the first window left the structure (a tenth of a millisecond on: it has barely moved).
+        current = f["interface/vertices"][:] + f["interface/displacement"][0]
+        cells = f["interface/cells"][:]
+        pos = f["frames/fluid/position"][0]
+        solid = pos[f["frames/fluid/kind"][0][:, 0] == 2]
+        worst = max(min(quad_distance(p, current[c]) for c in cells) for p in solid)
+    print(f"t = 0: largest distance of a solid particle outside the deflected obstacle: {worst / dp:.4f} dp")
+    assert worst < 0.1 * dp
+    # Deflected into the water (the gate's tip 3 mm, 0.75 dp, towards the column): the fluid clears the water
+    # within dp/2 of the deflected faces. Keeping what lay outside the cross-section but closer blew the first
+    # step up (a particle at 41 m/s against max_mach * c0 = 17 m/s).
+    out = harness.out_dir("deformed-start-gate")
+    code, text = harness.sphfsi("run", os.path.join(SCENARIOS, "elastic_gate.toml"), "--out", out, "--quiet",
+                                "--set", "fluid.dp=0.004", "--set", "run.end_time=0.01", "--set", "structure.initial.mode=1",
+                                "--set", "structure.initial.mode_amplitude=0.003", timeout=240)
+    assert code == 0, text
+
+
+def test_a_protocol_1_fluid_is_not_started_from_a_deformed_structure():
+    # Protocol 1 cannot pass the interface state at t0: such a fluid would put the structure where it is not.
+    misbehaving = os.path.join(harness.ROOT, "tests", "participants", "misbehaving.py")
+    out = harness.out_dir("deformed-start-v1-fluid")
+    code, text = harness.sphfsi("run", os.path.join(SCENARIOS, "elastic_obstacle.toml"), "--out", out, "--quiet",
+                                "--set", f'participants.fluid="/usr/bin/python3 {misbehaving}"',
+                                "--set", "structure.initial.mode=1", "--set", "structure.initial.mode_amplitude=0.002",
+                                env={"MISBEHAVE": "fluid_v1"}, timeout=60)
+    assert code == 1 and "fluid speaks protocol 1, which cannot start from the structure's deformed" in text, text
+
+
 def test_hydrostatic_plate_settles_to_plate_theory():
     """issue 5: the plate under a 2 m water column (Fourey et al. 2017) settles to
     w = -(rho_f g H + rho_s g t) L^4 / (384 D), D = E t^3 / (12 (1 - nu^2)), within 5 %. The weakly

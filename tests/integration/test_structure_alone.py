@@ -36,6 +36,27 @@ def test_step_response_matches_analytic():
     print(f"max |y - y_analytic| = {worst:.2e} m (static deflection {static} m)")
 
 
+def test_a_displaced_start_is_recorded_from_t0():
+    """protocol 2: the plate reports its state at t0 in READY, so the watchpoint starts at y_initial instead of
+    0 (protocol 1 has no field for it); the response is the step response plus the free decay from y0."""
+    out = harness.out_dir("plate-displaced")
+    y0 = 0.01
+    harness.sphfsi("run", SCENE, "--out", out, "--quiet", "--set", f"structure.y_initial={y0}", check=0)
+    w = math.sqrt(K / M)
+    zeta = C / (2 * math.sqrt(K * M))
+    wd = w * math.sqrt(1 - zeta * zeta)
+
+    def expected(t):
+        free = y0 * math.exp(-zeta * w * t) * (math.cos(wd * t) + zeta * w / wd * math.sin(wd * t))
+        return step_response(t, M, C, K, F) + free
+
+    with open(os.path.join(out, "watchpoints.csv")) as fh:
+        rows = list(csv.DictReader(fh))
+    assert float(rows[0]["time"]) == 0 and float(rows[0]["dy"]) == y0, rows[0]
+    worst = max(abs(float(r["dy"]) - expected(float(r["time"]))) for r in rows)
+    assert worst < 1e-9 * abs(F / K), worst  # the participant integrates exactly, as in the step test
+
+
 def test_set_override_changes_the_run():
     out = harness.out_dir("plate-set")
     harness.sphfsi("run", SCENE, "--out", out, "--quiet", "--set", "load.force=[0.0, -200.0]", "--set", "run.end_time=0.5",

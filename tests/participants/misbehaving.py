@@ -15,6 +15,7 @@ section picks the fault:
   mode = "wrong_time"     reports reaching t + dt + 1 s
   mode = "empty_state"    answers CHECKPOINT with a STATE without bytes
   mode = "wrong_kind"     says HELLO with kind "fluid" (from the env, like "version")
+  mode = "fluid_v1"       says HELLO as a fluid speaking protocol 1 only (from the env; for the fluid role)
   mode = "frame_time"     sends a FRAME field named "time" (the recorder's own)
   mode = "frame_bad_name" sends a FRAME field named ""
   mode = "frame_changes"  sends field y in its first FRAME, y and zz in the next
@@ -66,7 +67,7 @@ def main():
     # The mode arrives only with INIT; a version fault must show at HELLO, so it may also come from the env.
     mode = os.environ.get("MISBEHAVE", "")
     version = 99 if mode == "version" else 1
-    kind_said = "fluid" if mode == "wrong_kind" else "structure"
+    kind_said = "fluid" if mode in ("wrong_kind", "fluid_v1") else "structure"
     send("HELLO", 1, {"name": args.get("--name", "structure"), "kind": kind_said, "version_min": version,
                       "version_max": version, "software": "misbehaving.py", "pid": os.getpid()}, v=version)
     reply = recv()

@@ -54,7 +54,7 @@ import time
 
 SOFTWARE = "rigid_plate.py 1.0"
 PROTOCOL_MIN = 1
-PROTOCOL_MAX = 1
+PROTOCOL_MAX = 2                     # 2 adds interface_state to INIT and READY (the plate's state at t0)
 MAX_MESSAGE_BYTES = 1 << 30          # docs/protocol.md section 1: 1 GiB
 MAX_SUBSTEPS = 10_000_000            # our own bound on the work one ADVANCE may ask for
 WELCOME_WAIT_S = 30.0                # how long to wait for WELCOME after HELLO (protocol does not say)
@@ -697,7 +697,10 @@ class Participant:
         self.hb_thread.start()
 
     def on_init(self, seq, body):
-        check_keys(body, ("config", "t0", "interface", "state"), "INIT")
+        keys = ("config", "t0", "interface", "state") + (("interface_state",) if self.version >= 2 else ())
+        check_keys(body, keys, "INIT")
+        if self.version >= 2 and body["interface_state"] != {}:
+            raise bad("INIT interface_state must be empty for a structure")
         t0 = _float(body["t0"], "INIT t0")
         if body["interface"] is not None:
             raise bad("INIT interface must be nil for a structure")
@@ -718,7 +721,15 @@ class Participant:
         zeta = p["damping"] / (2.0 * math.sqrt(p["mass"] * p["stiffness"]))
         info = {"vertices": n, "cells": len(plate.cells), "period_s": p["period"], "damping_ratio": zeta,
                 "dt_max_s": p["dt_max"], "resumed": 1 if state else 0}
-        self.send("READY", seq, {"dt_wanted": p["dt_max"], "interface": mesh, "info": info})
+        ready = {"dt_wanted": p["dt_max"], "interface": mesh, "info": info}
+        if self.version >= 2:
+            # Every vertex moves with the plate: y_initial / v_initial (or a resumed state) at t0, so the
+            # coordinator's watchpoints and a fluid see the plate where it is from the start.
+            moving = plate.y != 0.0 or plate.v != 0.0
+            ready["interface_state"] = {
+                "displacement": f8_array([0.0, plate.y] * n, (n, 2)),
+                "velocity": f8_array([0.0, plate.v] * n, (n, 2))} if moving else {}
+        self.send("READY", seq, ready)
         self.state = "READY"
 
     def restore_checkpoint(self, plate, state, t0):

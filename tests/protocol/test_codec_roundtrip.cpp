@@ -67,7 +67,7 @@ TEST_CASE("HELLO, WELCOME, ERROR round-trip") {
 }
 
 TEST_CASE("INIT and READY round-trip with config, mesh and state") {
-    InitRequest init{sample_config(), 0.25, small_mesh(), {0, 1, 2, 255}};
+    InitRequest init{sample_config(), 0.25, small_mesh(), {0, 1, 2, 255}, {}};
     Message r = roundtrip(make_message(MessageType::Init, 2, "t", init));
     const auto& got = r.as<InitRequest>();
     same_value(init.config, got.config);
@@ -76,15 +76,39 @@ TEST_CASE("INIT and READY round-trip with config, mesh and state") {
     CHECK(*got.interface == *init.interface);
     CHECK(got.state == init.state);
 
-    InitRequest bare{Value(Value::Table{}), 0.0, std::nullopt, {}};
+    InitRequest bare{Value(Value::Table{}), 0.0, std::nullopt, {}, {}};
     CHECK_FALSE(roundtrip(make_message(MessageType::Init, 3, "t", bare)).as<InitRequest>().interface.has_value());
 
-    InitReply ready{1e-4, small_mesh(), Value(Value::Table{{"particles", Value(1234)}})};
+    InitReply ready{1e-4, small_mesh(), Value(Value::Table{{"particles", Value(1234)}}), {}};
     Message mr = roundtrip(make_message(MessageType::Ready, 2, "t", ready));
     const auto& gr = mr.as<InitReply>();
     CHECK(gr.dt_wanted == 1e-4);
     CHECK(*gr.interface == *ready.interface);
     CHECK(gr.info.at("particles").as_int() == 1234);
+}
+
+TEST_CASE("the interface state at t0 travels in INIT and READY from protocol 2 on, and not in 1") {
+    const F64Array u({4, 2}, {0, -0.001, 0, -0.002, 0.5, 0, 0, 0});
+    const F64Array v({4, 2}, {0, 0.1, 0, 0, 0, 0, -0.25, 0});
+    const Fields state{{"displacement", u}, {"velocity", v}};
+    Message ready = make_message(MessageType::Ready, 2, "t", InitReply{1e-4, small_mesh(), Value(Value::Table{}), state});
+    Message init = make_message(MessageType::Init, 2, "t", InitRequest{sample_config(), 0.0, small_mesh(), {}, state});
+    CHECK(std::get<F64Array>(roundtrip(ready).as<InitReply>().interface_state.at("displacement")) == u);
+    CHECK(std::get<F64Array>(roundtrip(init).as<InitRequest>().interface_state.at("velocity")) == v);
+    // A protocol-1 session has no such key: the state is dropped on the way out, and a protocol-1 body with
+    // the key is refused like any key of another version (a strict protocol-1 decoder would refuse it too).
+    ready.version = init.version = 1;
+    CHECK(roundtrip(ready).as<InitReply>().interface_state.empty());
+    CHECK(roundtrip(init).as<InitRequest>().interface_state.empty());
+    Message v2 = make_message(MessageType::Ready, 2, "t", InitReply{1e-4, small_mesh(), Value(Value::Table{}), state});
+    std::string bytes = encode(v2);
+    // Rewrite the envelope's v from 2 to 1 (the fixint 0x02 right after the key "v") and decode it again.
+    const std::string key_v = std::string("\xa1v", 2);
+    const auto at = bytes.find(key_v);
+    REQUIRE(at != std::string::npos);
+    REQUIRE(bytes[at + 2] == '\x02');
+    bytes[at + 2] = '\x01';
+    CHECK_THROWS_AS(decode(bytes.data(), bytes.size()), ProtocolError);
 }
 
 TEST_CASE("ADVANCE and ADVANCED round-trip with binary arrays, bit for bit") {

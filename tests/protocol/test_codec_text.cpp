@@ -107,7 +107,7 @@ TEST_CASE("the encoder writes only UTF-8, and valid text unchanged") {
     CHECK(sent_text(text) == text);  // control characters are valid UTF-8: only printable() escapes them
 
     Value::Table config{{"na\xffme", Value("va\xfelue")}};
-    Message init = make_message(MessageType::Init, 2, "tok", InitRequest{Value(config), 0.0, std::nullopt, {}});
+    Message init = make_message(MessageType::Init, 2, "tok", InitRequest{Value(config), 0.0, std::nullopt, {}, {}});
     const std::string bytes = encode(init);
     const Value got = decode(bytes.data(), bytes.size()).as<InitRequest>().config;
     CHECK(got.at("na\\xffme").as_string() == "va\\xfelue");

@@ -37,12 +37,18 @@ struct InitRequest {
     double t0 = 0.0;                       // start time [s]
     std::optional<InterfaceMesh> interface;  // fluid: the structure's interface mesh when coupled
     std::vector<std::uint8_t> state;       // non-empty: resume from this checkpoint (from checkpoint())
+    // Protocol 2, fluid: "displacement" and "velocity" (n, 2) of the interface at t0 when the structure starts
+    // deformed or moving; empty = undeformed and at rest (always so under protocol 1).
+    Fields interface_state;
 };
 
 struct InitReply {
     double dt_wanted = 0.0;                // largest step the solver wants next [s]
     std::optional<InterfaceMesh> interface;  // structure: the interface mesh it publishes
     Value info;                            // a table of facts for the record (particle count, ...)
+    // Protocol 2, structure: "displacement" and "velocity" (n, 2) of its interface at t0; empty = undeformed
+    // and at rest. Dropped (not sent) in a protocol-1 session.
+    Fields interface_state;
 };
 
 struct AdvanceRequest {
