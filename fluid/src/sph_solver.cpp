@@ -108,6 +108,20 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
             },
             [g](const Vec2& p) { return p[0] > g.x0 && p[0] < g.x0 + g.thickness && p[1] < g.height; });
     }
+    // A checkpoint opens with the interface displacement the run started from (empty: undeformed): a resume
+    // clears the water around the structure where the first start did, so it lays out the same particles.
+    std::optional<ByteReader> saved;
+    if (!request.state.empty()) {
+        saved.emplace(request.state);
+        try {
+            saved->get_vector(start_displacement_);
+        } catch (const std::runtime_error& e) {
+            throw SolverError("bad_config", e.what());
+        }
+    } else {
+        const F64Array* u0 = find_f64(request.interface_state, "displacement");
+        start_displacement_ = u0 ? u0->values : std::vector<double>{};
+    }
     if (request.interface) {
         check_inside_tank(*request.interface, settings_);
         try {
@@ -129,19 +143,26 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
             throw SolverError("bad_message", std::string("INIT interface_state: ") + e.what());
         }
         coupling->end_window();
-        // Water is cleared from the structure where it stands at t0, and from within dp/2 of its faces: a lattice
-        // laid against an undeformed face keeps its first row at exactly dp/2 (so nothing changes there), but
-        // a structure that starts deflected into the water would otherwise meet particles at a fraction of dp
-        // from its solid particles, which blew the first step up (elastic gate, mode-1 start).
+        // Water is cleared from the structure where it stood at the start, and from within dp/2 of its faces (at
+        // least dp from its solid particles, which sit dp/2 inside): a lattice laid against a face keeps its first
+        // row at exactly dp/2, but a structure that starts deflected into the water would otherwise meet particles
+        // at a fraction of dp from its solid particles, which blew the first step up (elastic gate, mode-1 start).
         const double clearance = 0.5 * settings_.dp * (1.0 - 1e-9);
-        std::vector<std::array<Vec2, 4>> quads;
         const auto& mesh = *request.interface;
+        if (!start_displacement_.empty() && start_displacement_.size() != 2 * mesh.vertices.rows())
+            throw SolverError("bad_config", "checkpoint: its start displacement has " +
+                                                std::to_string(start_displacement_.size() / 2) + " vertices, the mesh " +
+                                                std::to_string(mesh.vertices.rows()));
+        auto start = [&](std::uint64_t v, int axis) {
+            const double u = start_displacement_.empty() ? 0.0 : start_displacement_[2 * v + static_cast<std::uint64_t>(axis)];
+            return mesh.vertices(v, static_cast<std::uint64_t>(axis)) + u;
+        };
+        std::vector<std::array<Vec2, 4>> quads;
         for (std::size_t c = 0; c < mesh.cells.rows(); ++c) {
             std::array<Vec2, 4> q;
             for (int k = 0; k < 4; ++k) {
                 const auto v = static_cast<std::uint64_t>(mesh.cells(c, static_cast<std::uint64_t>(k)));
-                q[static_cast<std::size_t>(k)] = Vec2{{mesh.vertices(v, 0) + (u0 ? (*u0)(v, 0) : 0.0),
-                                                       mesh.vertices(v, 1) + (u0 ? (*u0)(v, 1) : 0.0)}};
+                q[static_cast<std::size_t>(k)] = Vec2{{start(v, 0), start(v, 1)}};
             }
             quads.push_back(q);
         }
@@ -149,14 +170,20 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
             coupling->reference_positions(),
             [coupling](std::size_t k, double t, Vec2& x, Vec2& v, Vec2& a) { coupling->kinematics(k, t, x, v, a); },
             [quads, clearance](const Vec2& p) {
-                for (const auto& q : quads)
-                    if (distance_to_quad(q, p) < clearance) return true;
+                for (const auto& q : quads) {
+                    bool near_box = true;  // cheap test first: a fluid particle is near few of the cells
+                    for (int axis = 0; axis < 2; ++axis) {
+                        const auto [lo, hi] = std::minmax({q[0][axis], q[1][axis], q[2][axis], q[3][axis]});
+                        near_box = near_box && p[axis] > lo - clearance && p[axis] < hi + clearance;
+                    }
+                    if (near_box && distance_to_quad(q, p) < clearance) return true;
+                }
                 return false;
             });
     }
-    if (!request.state.empty()) {
+    if (saved) {
         try {
-            ByteReader r(request.state);
+            ByteReader& r = *saved;
             sim_->read_state(r);
             const bool has_coupling = r.get<std::uint8_t>() != 0;
             if (has_coupling != coupling_.has_value())
@@ -294,6 +321,7 @@ protocol::Fields SphSolver::snapshot() {
 std::vector<std::uint8_t> SphSolver::checkpoint() {
     require_init();
     ByteWriter w;
+    w.put_vector(start_displacement_);  // first: a resume lays out its particles around it (init)
     sim_->write_state(w);
     w.put<std::uint8_t>(coupling_ ? 1 : 0);
     if (coupling_) write_coupling_state(w, coupling_->state());

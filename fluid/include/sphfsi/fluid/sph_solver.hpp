@@ -34,6 +34,9 @@ private:
     std::unique_ptr<Simulation2D> sim_;
     std::optional<InterfaceCoupling> coupling_;
     InterfaceCoupling::State saved_coupling_;
+    // The interface displacement (n x 2, row-major) the run started from; empty: undeformed. Checkpointed, so
+    // a resume clears the water around the structure where the first start did.
+    std::vector<double> start_displacement_;
 };
 
 }  // namespace sphfsi::fluid

@@ -13,6 +13,8 @@ namespace sphfsi::fluid {
 
 class ByteWriter {
 public:
+    // Reserving up front also keeps GCC 12 from a false -Wstringop-overflow on the first insert.
+    ByteWriter() { bytes_.reserve(4096); }
     template <class T>
     void put(const T& value) {
         static_assert(std::is_trivially_copyable_v<T>);
@@ -23,6 +25,7 @@ public:
     void put_vector(const std::vector<T>& v) {
         static_assert(std::is_trivially_copyable_v<T>);
         put<std::uint64_t>(v.size());
+        if (v.empty()) return;  // data() may be null
         const auto* p = reinterpret_cast<const std::uint8_t*>(v.data());
         bytes_.insert(bytes_.end(), p, p + v.size() * sizeof(T));
     }
