@@ -7,7 +7,7 @@ build="${SPHFSI_BUILD_DIR:-$here/build}"
 scene="${1:-$here/scenarios/elastic_gate.toml}"
 name=$(basename "$scene" .toml)
 out="$here/out/$name"
-"$build/bin/sphfsi" run "$scene" --out "$out"
+"$build/bin/sphfsi" run "$scene" --out "$out" --overwrite  # the demo's own folder: each run replaces the last
 if [ -f "$out/watchpoints.csv" ]; then
   refs=()
   if [ "$name" = elastic_gate ]; then  # the experiment's tip displacements
