@@ -1,6 +1,8 @@
 #include "sphfsi/structure/modal.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/QR>
 #include <Eigen/SVD>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
@@ -15,20 +17,20 @@ namespace {
 // Above this many free DOFs the O(n^3) dense solver gets slower than subspace iteration.
 constexpr int dense_limit = 150;
 
-// Rough square of the highest frequency, from the diagonals: the scale of the shift for a singular K.
+// Rough square of the highest frequency, from the diagonals: the floor of the convergence test.
 double omega2_scale(const SparseMatrix& Kr, const SparseMatrix& Mr) {
     double s = 0;
     for (int i = 0; i < Kr.rows(); ++i) s = std::max(s, Kr.coeff(i, i) / Mr.coeff(i, i));
     return s;
 }
 
-// How many rigid-body modes the structure has: the dimension of the rigid motions (two translations and
-// a rotation per connected part; members are welded where they meet, so there are no other mechanisms)
-// that the supports leave admissible, i.e. that lie in range(T). Counted from the geometry, not from
-// small eigenvalues: the lowest elastic omega^2 of a fine mesh falls like 1/n^4 against the highest, so a
-// fixed "numerically zero" fraction of the highest miscounted a 400-element cantilever as having no
+// The rigid-body modes the structure has, as columns in the free coordinates q (u = T q): the rigid motions
+// (two translations and a rotation per connected part; members are welded where they meet, so there are no
+// other mechanisms) that the supports leave admissible, i.e. that lie in range(T). Found from the geometry,
+// not from small eigenvalues: the lowest elastic omega^2 of a fine mesh falls like 1/n^4 against the highest,
+// so a fixed "numerically zero" fraction of the highest miscounted a 400-element cantilever as having no
 // elastic modes at all.
-int rigid_motion_count(const Model& model) {
+Eigen::MatrixXd rigid_motions(const Model& model) {
     const int n = model.node_count();
     std::vector<int> part(n);  // union-find over the elements: which connected part each node is in
     for (int i = 0; i < n; ++i) part[i] = i;
@@ -41,26 +43,40 @@ int rigid_motion_count(const Model& model) {
     int parts = 0;
     for (int i = 0; i < n; ++i)
         if (column[root(i)] < 0) column[root(i)] = parts++;
+    std::vector<Vec2> centroid(parts, Vec2::Zero());
+    std::vector<int> count(parts, 0);
+    for (int i = 0; i < n; ++i) {
+        centroid[column[root(i)]] += model.nodes[i];
+        ++count[column[root(i)]];
+    }
+    for (int p = 0; p < parts; ++p) centroid[p] /= count[p];
 
-    // Unit-scaled rigid motions of each part: ux, uy, and a rotation about the origin in units of the
-    // characteristic length (so all three columns have comparable norms).
-    const double ell = model.characteristic_length;
+    // Rigid motions of each part: ux, uy, and a rotation about the part's centroid, which makes the three
+    // columns orthogonal (a rotation about a far origin would be nearly a translation, and the rank test
+    // below would lose it); each column then scaled to unit norm.
     Eigen::MatrixXd R = Eigen::MatrixXd::Zero(model.dof_count(), 3 * parts);
     for (int i = 0; i < n; ++i) {
-        const int c = 3 * column[root(i)];
+        const int p = column[root(i)], c = 3 * p;
+        const Vec2 r = model.nodes[i] - centroid[p];
         R(3 * i, c) = 1.0;
         R(3 * i + 1, c + 1) = 1.0;
-        R(3 * i, c + 2) = -model.nodes[i].y() / ell;
-        R(3 * i + 1, c + 2) = model.nodes[i].x() / ell;
-        R(3 * i + 2, c + 2) = 1.0 / ell;
+        R(3 * i, c + 2) = -r.y();
+        R(3 * i + 1, c + 2) = r.x();
+        R(3 * i + 2, c + 2) = 1.0;
     }
     R.colwise().normalize();
     // T's columns are orthonormal (unit directions on disjoint DOFs), so R - T T^T R is the part of each
     // motion the supports forbid; its null space is the admissible rigid motions. Its singular values are
-    // roundoff (~1e-16) on that space and at least ~1/sqrt(nodes) off it (one supported node of a unit motion).
+    // roundoff (~1e-16) on that space and of order 1/sqrt(nodes of the part) off it (one supported node's
+    // share of a unit motion).
     const Eigen::MatrixXd violation = R - model.T * (model.T.transpose() * R);
-    const Eigen::VectorXd sigma = Eigen::JacobiSVD<Eigen::MatrixXd>(violation).singularValues();
-    return static_cast<int>((sigma.array() < 1e-8).count());
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(violation, Eigen::ComputeThinV);
+    std::vector<int> free_combinations;
+    for (int j = 0; j < svd.singularValues().size(); ++j)
+        if (svd.singularValues()[j] < 1e-8) free_combinations.push_back(j);
+    Eigen::MatrixXd C(R.cols(), static_cast<Eigen::Index>(free_combinations.size()));
+    for (std::size_t k = 0; k < free_combinations.size(); ++k) C.col(static_cast<Eigen::Index>(k)) = svd.matrixV().col(free_combinations[k]);
+    return model.T.transpose() * (R * C);  // admissible: T times this is R C itself
 }
 
 void count_rigid(Modes& modes, int rigid) { modes.rigid_body = std::min<int>(rigid, static_cast<int>(modes.omega2.size())); }
@@ -78,7 +94,7 @@ Modes dense_modes(const Model& model, const SparseMatrix& K, const SparseMatrix&
     Modes modes;
     modes.omega2 = es.eigenvalues();
     modes.shapes = model.T * es.eigenvectors();
-    count_rigid(modes, rigid_motion_count(model));
+    count_rigid(modes, static_cast<int>(rigid_motions(model).cols()));
     return modes;
 }
 
@@ -88,21 +104,40 @@ Modes subspace_modes(const Model& model, const SparseMatrix& K, const SparseMatr
     const int n = static_cast<int>(Kr.rows());
     const double scale = omega2_scale(Kr, Mr);
 
-    const int rigid = rigid_motion_count(model);
-    Eigen::SimplicialLDLT<SparseMatrix> ldlt;
-    double shift = 0.0;
-    if (rigid == 0) ldlt.compute(Kr);
-    if (rigid > 0 || ldlt.info() != Eigen::Success) {
-        // Unsupported structure: factorize K + s M instead (s > 0 keeps it definite). The Ritz values
-        // below still use K and M, so the shift slows convergence but does not bias the result.
-        shift = 1e-8 * scale;
-        ldlt.compute(SparseMatrix(Kr + shift * Mr));
-        if (ldlt.info() != Eigen::Success)
-            throw protocol::SolverError("internal", "structure: cannot factorize K for the modal analysis");
-        count += rigid;  // room for the rigid-body modes (zero frequency) in front of the elastic ones
+    // Rigid-body modes (unsupported or partly supported structures) are known exactly: M-orthonormalise them,
+    // and iterate on the elastic modes only, M-orthogonal to them ("inertia relief"). A shift K + s M instead
+    // must stay far below the lowest elastic omega^2, which falls like 1/n^4: at 3000 free-free elements a
+    // shift of 1e-8 of the highest swamped it, and the iteration returned 1180 Hz for a 106 Hz mode.
+    Eigen::MatrixXd rigid = rigid_motions(model);
+    const int r = static_cast<int>(rigid.cols());
+    std::vector<int> grounded;  // r free coordinates held at zero so that K becomes definite
+    if (r > 0) {
+        const Eigen::LLT<Eigen::MatrixXd> gram(rigid.transpose() * (Mr * rigid));
+        rigid = gram.matrixL().solve(rigid.transpose()).transpose();  // now rigid^T M rigid = I
+        // The coordinates where the rigid modes are most independent (column-pivoted QR): holding them stops
+        // every rigid motion, and with no mechanisms the rest of K is definite.
+        const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(rigid.transpose());
+        for (int k = 0; k < r; ++k) grounded.push_back(qr.colsPermutation().indices()[k]);
     }
-    count = std::min(count, n);
-    const int p = std::min(n, std::max(2 * count, count + 8));  // Bathe's subspace size
+    std::vector<char> held(static_cast<std::size_t>(n), 0);
+    for (int i : grounded) held[static_cast<std::size_t>(i)] = 1;
+    std::vector<Eigen::Triplet<double>> kept;
+    for (int c = 0; c < Kr.outerSize(); ++c)
+        for (SparseMatrix::InnerIterator it(Kr, c); it; ++it)
+            if (!held[static_cast<std::size_t>(it.row())] && !held[static_cast<std::size_t>(it.col())])
+                kept.emplace_back(static_cast<int>(it.row()), static_cast<int>(it.col()), it.value());
+    for (int i : grounded) kept.emplace_back(i, i, Kr.coeff(i, i));
+    SparseMatrix Kg(n, n);
+    Kg.setFromTriplets(kept.begin(), kept.end());
+    const Eigen::SimplicialLDLT<SparseMatrix> ldlt(Kg);
+    if (ldlt.info() != Eigen::Success)
+        throw protocol::SolverError("internal", "structure: cannot factorize K for the modal analysis");
+
+    auto deflate = [&](Eigen::MatrixXd& Z) {
+        if (r > 0) Z -= rigid * (rigid.transpose() * (Mr * Z));
+    };
+    count = std::min(count, n - r);
+    const int p = std::min(n - r, std::max(2 * count, count + 8));  // Bathe's subspace size
 
     // Deterministic start vectors: the diagonal ratio (excites the softest DOFs) and smooth waves.
     Eigen::MatrixXd X(n, p);
@@ -110,28 +145,40 @@ Modes subspace_modes(const Model& model, const SparseMatrix& K, const SparseMatr
         X(i, 0) = Mr.coeff(i, i) / Kr.coeff(i, i);
         for (int j = 1; j < p; ++j) X(i, j) = std::sin(0.37 * (i + 1) * j + 0.11 * j);
     }
-    Modes modes;
+    deflate(X);
     Eigen::VectorXd previous = Eigen::VectorXd::Constant(p, -1.0);
-    for (int iteration = 0; iteration < 200; ++iteration) {
+    double change = 1.0;
+    for (int iteration = 0; iteration < 200 && change >= 1e-12; ++iteration) {
         const Eigen::MatrixXd MX = Mr * X;
-        const Eigen::MatrixXd Y = ldlt.solve(MX);
-        // Projected stiffness from K Y = M X - s M Y instead of multiplying K Y out: for smooth
-        // (low) modes |K Y| << |K| |Y| and the product would lose most of its digits.
+        // M X is M-orthogonal to the rigid modes (self-equilibrated), so the reactions at the held
+        // coordinates are zero and the grounded solve solves K Y = M X itself; its rigid part is removed.
+        Eigen::MatrixXd F = MX;
+        for (int i : grounded) F.row(i).setZero();
+        Eigen::MatrixXd Y = ldlt.solve(F);
+        deflate(Y);
+        // Projected stiffness from K Y = M X instead of multiplying K Y out: for smooth (low) modes
+        // |K Y| << |K| |Y| and the product would lose most of its digits.
         const Eigen::MatrixXd Mp = Y.transpose() * (Mr * Y);
-        const Eigen::MatrixXd Kp = Y.transpose() * MX - shift * Mp;
+        const Eigen::MatrixXd Kp = Y.transpose() * MX;
         Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (Kp + Kp.transpose()),
                                                                       0.5 * (Mp + Mp.transpose()));
         X = Y * es.eigenvectors();
         const Eigen::VectorXd lambda = es.eigenvalues();
-        double change = 0;
+        change = 0;
         for (int k = 0; k < count; ++k)
             change = std::max(change, std::abs(lambda[k] - previous[k]) / std::max(std::abs(lambda[k]), 1e-12 * scale));
         previous = lambda;
-        if (change < 1e-12) break;
     }
-    modes.omega2 = previous.head(count);
-    modes.shapes = model.T * X.leftCols(count);
-    count_rigid(modes, rigid);
+    if (change > 1e-8)
+        throw protocol::SolverError("internal", "structure: the modal analysis did not converge in 200 subspace "
+                                                "iterations (relative change " + std::to_string(change) + ")");
+    Modes modes;
+    modes.omega2 = Eigen::VectorXd::Zero(r + count);
+    modes.omega2.tail(count) = previous.head(count);
+    Eigen::MatrixXd shapes(n, r + count);
+    shapes << rigid, X.leftCols(count);
+    modes.shapes = model.T * shapes;
+    modes.rigid_body = r;
     return modes;
 }
 

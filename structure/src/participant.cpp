@@ -1,5 +1,6 @@
 #include "sphfsi/structure/participant.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -58,7 +59,8 @@ InitReply StructureSolver::init(const InitRequest& request) {
     const Model& m = dynamics_->model();
     const Modes& modes = dynamics_->modes();
     Value::Table freqs;  // READY info holds numbers, strings, booleans and maps, no arrays
-    for (int i = modes.rigid_body; i < modes.omega2.size(); ++i)
+    // The lowest 20 at most: READY info is bounded (256 entries), and initial.mode may ask for many more.
+    for (int i = modes.rigid_body; i < std::min<int>(static_cast<int>(modes.omega2.size()), modes.rigid_body + 20); ++i)
         freqs["mode_" + std::to_string(i - modes.rigid_body + 1)] = Value(modes.omega(i) / (2 * std::numbers::pi));
     Value::Table info{{"nodes", Value(m.node_count())},
                       {"elements", Value(static_cast<int>(m.elements.size()))},

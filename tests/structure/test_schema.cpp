@@ -55,6 +55,11 @@ TEST_CASE("types, ranges and unknown keys are reported with their dotted path") 
     s = beam(10);
     set(s, "members[0].end", vec(1.0, 1e300));
     CHECK(mentions(problem(s), "key 'structure.members[0].end': an entry is 1e+300; allowed: an array of 2 numbers, each >= -1e+06"));
+    // Beyond 4000 elements in all double precision cannot resolve the lowest modes (schema.cpp, kMaxElements).
+    s = beam(3000);
+    set(s, "members", Value(Value::Array{table({{"start", vec(0, 0)}, {"end", vec(L, 0)}, {"n_elements", Value(3000)}}),
+                                         table({{"start", vec(L, 0)}, {"end", vec(2 * L, 0)}, {"n_elements", Value(2000)}})}));
+    CHECK(mentions(problem(s), "key 'structure.members': 5000 elements in all; allowed: at most 4000"));
 }
 
 TEST_CASE("supports and point loads must sit on nodes") {
