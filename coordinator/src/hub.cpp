@@ -203,9 +203,11 @@ void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) 
     // A refusal echoes the stranger's own token (empty when unreadable), never this run's: the run token is
     // the only thing keeping another local process from joining, so it must not be handed out on request.
     std::string their_token;
+    std::uint32_t their_version = kOldestSupportedVersion;  // a refusal in the stranger's own version if we speak it
     auto refuse = [&](std::uint64_t seq, const std::string& code, const std::string& why) {
         log_("refused a connection: " + why);
         Message e = make_message(MessageType::Error, seq, their_token, ErrorReply{code, why, seq});
+        e.version = their_version;
         send_raw(id, e);
     };
     Message m;
@@ -216,6 +218,7 @@ void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) 
         return refuse(e.seq(), e.code(), std::string("malformed first message: ") + e.what());
     }
     their_token = m.token;
+    if (m.version >= kOldestSupportedVersion && m.version <= kProtocolVersion) their_version = m.version;
     if (!is_answered(m.type)) {  // once per connection: a stray peer's heartbeats would fill the log
         if (quiet_strangers_.insert(id).second)
             log_("ignored " + std::string(to_string(m.type)) + " from an unknown connection (further ones not logged)");

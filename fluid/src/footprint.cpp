@@ -27,13 +27,16 @@ Footprint estimate_footprint(const sphfsi::Value& fluid) {
     const bool lid = floor && tank.at("closed_top").as_bool();
 
     Footprint f;
+    // Water is laid at the lattice spacing stretched to period / count along a periodic axis, obstacles at dp.
+    const double sx = walls_x ? dp : W / along(W, dp), sy = floor ? dp : H / along(H, dp);
     double water_top = 0;
-    for (const char* list : {"water", "obstacle"})
-        if (const sphfsi::Value* boxes = fluid.find(list))
-            for (const sphfsi::Value& b : boxes->as_array()) {
-                f.particles += along(num(b, "width"), dp) * along(num(b, "height"), dp);
-                if (std::string_view(list) == "water") water_top = std::max(water_top, num(b, "y0") + num(b, "height"));
-            }
+    if (const sphfsi::Value* boxes = fluid.find("water"))
+        for (const sphfsi::Value& b : boxes->as_array()) {
+            f.particles += along(num(b, "width"), sx) * along(num(b, "height"), sy);
+            water_top = std::max(water_top, num(b, "y0") + num(b, "height"));
+        }
+    if (const sphfsi::Value* boxes = fluid.find("obstacle"))
+        for (const sphfsi::Value& b : boxes->as_array()) f.particles += along(num(b, "width"), dp) * along(num(b, "height"), dp);
     const double row = along(W, dp) + (walls_x ? 2 * layers : 0);
     f.particles += layers * row * ((floor ? 1 : 0) + (lid ? 1 : 0)) + (walls_x ? 2 * layers * along(H, dp) : 0);
     if (fluid.find("gate")) {

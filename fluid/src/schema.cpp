@@ -163,8 +163,10 @@ std::string sci(double v) {
 }
 
 // A spacing whose particles cannot be held is refused here, naming dp, rather than failing minutes into the
-// setup with std::bad_alloc. The coordinator and the participant each check against their own machine's
-// physical memory (a participant started elsewhere with --listen may have more).
+// setup with std::bad_alloc. The coordinator checks against its own machine's memory before it starts
+// anything, the participant again against its own: a fluid started on a larger machine (--listen) is still
+// refused by a coordinator whose machine could not hold it (the 600 B a particle include the coordinator's
+// share, 175 B, which it holds whatever the fluid's machine).
 void check_footprint(const Value& fluid, const std::string& path, Errors& errors) {
     const Footprint f = estimate_footprint(fluid);
     const double memory = physical_memory_bytes();
@@ -172,7 +174,7 @@ void check_footprint(const Value& fluid, const std::string& path, Errors& errors
     if (over_memory <= 1.0 && over_count <= 1.0) return;
     std::string why;
     if (over_memory > 1.0) why += "; this machine has " + sci(memory / 1e9) + " GB of memory";
-    if (over_count > 1.0) why += "; particle indices are 32-bit (at most " + sci(kMaxParticles) + " particles)";
+    if (over_count > 1.0) why += "; particle ids are 32-bit (at most " + sci(kMaxParticles) + " particles)";
     const double dp = num(fluid, "dp");
     // The water's area dominates what a fine spacing lays out: the count goes as 1/dp^2.
     errors.add(&fluid.at("dp"), "key '" + key(path, "dp") + "': " + sci(dp) + " m lays out about " + sci(f.particles) +

@@ -153,6 +153,9 @@ TEST_SUITE("scene") {
             with(water_tank(0.005, 0.1, 0.1, 0.1, 0.06), {{"periodic", "x"}, {"tank.closed_top", true}}),
             with(dam_break(0.004), {{"tank.closed_top", true}, {"tank.wall_layers", 4}}),
             with(water_tank(0.004, 0.4, 0.3, 0.1, 0.2), {{"gate.x0", 0.1}, {"gate.lift_speed", 1.0}}),
+            // Along a periodic axis the water lattice is stretched to period / count: 0.0513 m is 20 spacings
+            // of dp = 2.6 mm but 19 of the stretched 2.63 mm.
+            with(water_tank(0.0026, 0.1, 0.1, 0.0513, 0.05), {{"periodic", "x"}, {"tank.closed_top", true}}),
         };
         for (const Value& raw : scenes) {
             const Value f = sphfsi::fluid::validate_scene(raw);
@@ -169,7 +172,7 @@ TEST_SUITE("scene") {
         // indices count. The error names the key and a spacing that would fit.
         const std::string p = problems(with(dam_break(0.004), {{"dp", 1e-7}}));
         CHECK(p.find("key 'fluid.dp': 1e-07 m lays out about 2e+12 particles") != std::string::npos);
-        CHECK(p.find("particle indices are 32-bit") != std::string::npos);
+        CHECK(p.find("particle ids are 32-bit") != std::string::npos);
         CHECK(p.find("allowed: dp of about") != std::string::npos);
     }
 

@@ -13,8 +13,8 @@ namespace sphfsi::fluid {
 constexpr double kBytesPerParticle = 600.0;
 // The neighbour grid holds one 4-byte cell start per cell of one support radius.
 constexpr double kBytesPerCell = 4.0;
-// Particle indices are 32-bit (neighbour lists, the cell order).
-constexpr double kMaxParticles = 4.0e9;
+// Particle ids are signed 32-bit (ParticleStore::id, the first solid's id).
+constexpr double kMaxParticles = 2147483647.0;
 
 struct Footprint {
     double particles = 0;  // fluid, tank walls, obstacles and gate, as the lattice lays them out
