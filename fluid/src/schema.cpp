@@ -166,7 +166,7 @@ std::string sci(double v) {
 // setup with std::bad_alloc. The coordinator checks against its own machine's memory before it starts
 // anything, the participant again against its own: a fluid started on a larger machine (--listen) is still
 // refused by a coordinator whose machine could not hold it (the 600 B a particle include the coordinator's
-// share, 175 B, which it holds whatever the fluid's machine).
+// share, about 185 B, which it holds whatever the fluid's machine).
 void check_footprint(const Value& fluid, const std::string& path, Errors& errors) {
     const Footprint f = estimate_footprint(fluid);
     const double memory = physical_memory_bytes();

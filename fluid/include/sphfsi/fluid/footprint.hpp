@@ -6,10 +6,9 @@
 
 namespace sphfsi::fluid {
 
-// Peak resident bytes per particle of a run on one machine, rounded up: the solver's arrays are 160 - 172 B
-// (docs/benchmarks.md, "memory per particle"); the participant with its FRAME messages peaked at 385 B and the
-// coordinator recording them at 175 B (slopes of VmHWM between 205k and 800k particles, dam break, WCSPH,
-// 2026-11-26), 560 B together.
+// Peak resident bytes per particle of a run on one machine, rounded up: the solver's arrays are 160 - 172 B;
+// the participant with its FRAME messages peaks at 394 B and the coordinator recording them at 180 - 190 B,
+// 574 - 584 B together (tools/run_memory.py, docs/benchmarks.md "Memory of a whole run").
 constexpr double kBytesPerParticle = 600.0;
 // The neighbour grid holds one 4-byte cell start per cell of one support radius.
 constexpr double kBytesPerCell = 4.0;
