@@ -7,6 +7,7 @@
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "sphfsi/protocol/solver.hpp"
@@ -137,46 +138,70 @@ Modes subspace_modes(const Model& model, const SparseMatrix& K, const SparseMatr
         if (r > 0) Z -= rigid * (rigid.transpose() * (Mr * Z));
     };
     count = std::min(count, n - r);
-    const int p = std::min(n - r, std::max(2 * count, count + 8));  // Bathe's subspace size
 
-    // Deterministic start vectors: the diagonal ratio (excites the softest DOFs) and smooth waves.
-    Eigen::MatrixXd X(n, p);
-    for (int i = 0; i < n; ++i) {
-        X(i, 0) = Mr.coeff(i, i) / Kr.coeff(i, i);
-        for (int j = 1; j < p; ++j) X(i, j) = std::sin(0.37 * (i + 1) * j + 0.11 * j);
+    // One run of subspace iteration with p vectors; `change` is the last relative change of the `count` lowest
+    // Ritz values, +inf when the projected eigenproblem failed or gave a non-finite value.
+    struct Run {
+        Eigen::VectorXd lambda;
+        Eigen::MatrixXd X;
+        double change = std::numeric_limits<double>::infinity();
+    };
+    auto iterate = [&](int p) {
+        // Deterministic start vectors: the diagonal ratio (excites the softest DOFs) and smooth waves.
+        Run run;
+        run.X.resize(n, p);
+        for (int i = 0; i < n; ++i) {
+            for (int j = 0; j < p; ++j)
+                run.X(i, j) = j == 0 ? Mr.coeff(i, i) / Kr.coeff(i, i) : std::sin(0.37 * (i + 1) * j + 0.11 * j);
+        }
+        deflate(run.X);
+        run.lambda = Eigen::VectorXd::Constant(p, -1.0);
+        for (int iteration = 0; iteration < 200; ++iteration) {
+            const Eigen::MatrixXd MX = Mr * run.X;
+            // M X is M-orthogonal to the rigid modes (self-equilibrated), so the reactions at the held
+            // coordinates are zero and the grounded solve solves K Y = M X itself; its rigid part is removed.
+            Eigen::MatrixXd F = MX;
+            for (int i : grounded) F.row(i).setZero();
+            Eigen::MatrixXd Y = ldlt.solve(F);
+            deflate(Y);
+            // Projected stiffness from K Y = M X instead of multiplying K Y out: for smooth (low) modes
+            // |K Y| << |K| |Y| and the product would lose most of its digits.
+            const Eigen::MatrixXd Mp = Y.transpose() * (Mr * Y);
+            const Eigen::MatrixXd Kp = Y.transpose() * MX;
+            Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (Kp + Kp.transpose()),
+                                                                          0.5 * (Mp + Mp.transpose()));
+            if (es.info() != Eigen::Success || !es.eigenvalues().allFinite()) {
+                run.change = std::numeric_limits<double>::infinity();
+                return run;
+            }
+            run.X = Y * es.eigenvectors();
+            const Eigen::VectorXd& lambda = es.eigenvalues();
+            run.change = 0;
+            for (int k = 0; k < count; ++k)
+                run.change = std::max(run.change, std::abs(lambda[k] - run.lambda[k]) /
+                                                      std::max(std::abs(lambda[k]), 1e-12 * scale));
+            run.lambda = lambda;
+            if (run.change < 1e-12) break;
+        }
+        return run;
+    };
+    // Bathe's subspace size first; a run that has not settled in 200 iterations (the wanted modes' ratio to
+    // the first one left out is close to 1, or the projected problem broke down) is repeated with twice the
+    // vectors, up to all n - r, where the Ritz values are exact. Only then is it an error.
+    Run run;
+    for (int p = std::min(n - r, std::max(2 * count, count + 8));; p = std::min(n - r, 2 * p)) {
+        run = iterate(p);
+        if (run.change <= 1e-8) break;
+        if (p == n - r)
+            throw protocol::SolverError("internal", "structure: the modal analysis did not converge in 200 subspace "
+                                                    "iterations with all " + std::to_string(p) +
+                                                    " vectors (relative change " + std::to_string(run.change) + ")");
     }
-    deflate(X);
-    Eigen::VectorXd previous = Eigen::VectorXd::Constant(p, -1.0);
-    double change = 1.0;
-    for (int iteration = 0; iteration < 200 && change >= 1e-12; ++iteration) {
-        const Eigen::MatrixXd MX = Mr * X;
-        // M X is M-orthogonal to the rigid modes (self-equilibrated), so the reactions at the held
-        // coordinates are zero and the grounded solve solves K Y = M X itself; its rigid part is removed.
-        Eigen::MatrixXd F = MX;
-        for (int i : grounded) F.row(i).setZero();
-        Eigen::MatrixXd Y = ldlt.solve(F);
-        deflate(Y);
-        // Projected stiffness from K Y = M X instead of multiplying K Y out: for smooth (low) modes
-        // |K Y| << |K| |Y| and the product would lose most of its digits.
-        const Eigen::MatrixXd Mp = Y.transpose() * (Mr * Y);
-        const Eigen::MatrixXd Kp = Y.transpose() * MX;
-        Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (Kp + Kp.transpose()),
-                                                                      0.5 * (Mp + Mp.transpose()));
-        X = Y * es.eigenvectors();
-        const Eigen::VectorXd lambda = es.eigenvalues();
-        change = 0;
-        for (int k = 0; k < count; ++k)
-            change = std::max(change, std::abs(lambda[k] - previous[k]) / std::max(std::abs(lambda[k]), 1e-12 * scale));
-        previous = lambda;
-    }
-    if (change > 1e-8)
-        throw protocol::SolverError("internal", "structure: the modal analysis did not converge in 200 subspace "
-                                                "iterations (relative change " + std::to_string(change) + ")");
     Modes modes;
     modes.omega2 = Eigen::VectorXd::Zero(r + count);
-    modes.omega2.tail(count) = previous.head(count);
+    modes.omega2.tail(count) = run.lambda.head(count);
     Eigen::MatrixXd shapes(n, r + count);
-    shapes << rigid, X.leftCols(count);
+    shapes << rigid, run.X.leftCols(count);
     modes.shapes = model.T * shapes;
     modes.rigid_body = r;
     return modes;

@@ -15,7 +15,8 @@ struct Modes {
 
 // The `count` lowest modes (fewer if the structure has fewer free DOFs). Small models use a dense
 // generalized eigensolver; larger ones subspace iteration (Bathe) with Rayleigh-Ritz, on a sparse
-// LDLT factorization of K (shifted by a small multiple of M when K is singular, i.e. unsupported).
+// LDLT factorization of K. Rigid-body modes (from the geometry and supports) are exact and deflated: the
+// iteration runs M-orthogonal to them, with K grounded at as many coordinates as there are rigid modes.
 Modes lowest_modes(const Model& model, const SparseMatrix& K, const SparseMatrix& M, int count);
 
 // All modes by the dense solver (tests, small models).
