@@ -14,6 +14,11 @@
 namespace sphfsi::fluid {
 namespace {
 
+// The participant's checkpoint opens with "SPHFSIP2" (little-endian u64). Checkpoints of builds before
+// 2026-11-27 opened with the simulation state itself ("SPHFSIF1") and lack the start displacement.
+constexpr std::uint64_t checkpoint_magic = 0x3250495346485053ULL;         // "SPHFSIP2"
+constexpr std::uint64_t older_checkpoint_magic = 0x3146495346485053ULL;   // "SPHFSIF1"
+
 using protocol::F64Array;
 using protocol::I32Array;
 using protocol::SolverError;
@@ -114,7 +119,15 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
     if (!request.state.empty()) {
         saved.emplace(request.state);
         try {
+            const auto magic = saved->get<std::uint64_t>();
+            if (magic == older_checkpoint_magic)
+                throw SolverError("bad_config", "checkpoint: written by an older build of sphfsi-fluid (format SPHFSIF1, "
+                                                "before the start displacement was saved); this build cannot resume it: "
+                                                "start the run afresh, or resume with the build that wrote it");
+            if (magic != checkpoint_magic) throw SolverError("bad_config", "checkpoint: not a sphfsi-fluid checkpoint");
             saved->get_vector(start_displacement_);
+        } catch (const SolverError&) {
+            throw;
         } catch (const std::runtime_error& e) {
             throw SolverError("bad_config", e.what());
         }
@@ -321,7 +334,8 @@ protocol::Fields SphSolver::snapshot() {
 std::vector<std::uint8_t> SphSolver::checkpoint() {
     require_init();
     ByteWriter w;
-    w.put_vector(start_displacement_);  // first: a resume lays out its particles around it (init)
+    w.put(checkpoint_magic);
+    w.put_vector(start_displacement_);  // before the particles: a resume lays them out around it (init)
     sim_->write_state(w);
     w.put<std::uint8_t>(coupling_ ? 1 : 0);
     if (coupling_) write_coupling_state(w, coupling_->state());

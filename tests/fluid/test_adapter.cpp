@@ -175,6 +175,36 @@ TEST_SUITE("adapter") {
             }
     }
 
+    TEST_CASE("a checkpoint of an older build, or no checkpoint at all, is refused by name") {
+        const Value config = small_dam_break("wcsph");
+        auto s = start(config);
+        step(*s, 0.005);
+        auto message_of = [&](std::vector<std::uint8_t> bytes) -> std::string {
+            SphSolver resumed;
+            sphfsi::protocol::InitRequest req;
+            req.config = config;
+            req.state = std::move(bytes);
+            try {
+                resumed.init(req);
+            } catch (const sphfsi::protocol::SolverError& e) {
+                return e.code() + ": " + e.what();
+            }
+            return "accepted";
+        };
+        const auto bytes = s->checkpoint();
+        CHECK(message_of(bytes) == "accepted");
+        // Before 2026-11-27 a checkpoint was the simulation state alone, which opens with "SPHFSIF1".
+        std::vector<std::uint8_t> older(bytes.begin() + 16, bytes.end());  // magic and the empty displacement
+        REQUIRE(std::string(older.begin(), older.begin() + 8) == "SPHFSIF1");
+        CHECK(message_of(older).find("bad_config: checkpoint: written by an older build") == 0);
+        std::vector<std::uint8_t> foreign = bytes;
+        foreign[0] = 'X';
+        CHECK(message_of(foreign) == "bad_config: checkpoint: not a sphfsi-fluid checkpoint");
+        CHECK(message_of({1, 2, 3}).find("bad_config: checkpoint: truncated") == 0);
+        std::vector<std::uint8_t> cut(bytes.begin(), bytes.end() - 1);
+        CHECK(message_of(cut).find("bad_config: checkpoint: truncated") == 0);
+    }
+
     TEST_CASE("force mapping preserves total force and moment to round-off") {
         std::mt19937 rng(3);
         std::uniform_real_distribution<double> u(-1.0, 1.0);

@@ -57,7 +57,7 @@ public:
         if (n > bytes_.size()) throw std::runtime_error("checkpoint: corrupt vector length");
         need(n * sizeof(T));
         v.resize(n);
-        std::memcpy(static_cast<void*>(v.data()), bytes_.data() + pos_, n * sizeof(T));
+        if (n) std::memcpy(static_cast<void*>(v.data()), bytes_.data() + pos_, n * sizeof(T));  // data() may be null
         pos_ += n * sizeof(T);
     }
     std::string get_string() {
