@@ -38,24 +38,32 @@ def children(pid):
 def measure(sphfsi, dp):
     """Runs the dam break for one short window at spacing dp; returns (particles, coordinator KiB, fluid KiB)."""
     out = tempfile.mkdtemp(prefix="sphfsi-run-memory-")
-    try:
-        p = subprocess.Popen([sphfsi, "run", os.path.join(ROOT, "scenarios", "dam_break.toml"), "--out", out,
-                              "--overwrite", "--quiet", "--set", f"fluid.dp={dp}", "--set", "run.end_time=0.0005",
-                              "--set", "run.output_interval=0.0005"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-        coordinator = fluid = 0
-        while p.poll() is None:  # the peaks only grow, so the last reading before each process ends is its peak
-            coordinator = peak_kib(p.pid) or coordinator
-            for c in children(p.pid):
-                fluid = peak_kib(c) or fluid
-            time.sleep(0.1)
-        if p.returncode != 0:
-            raise SystemExit(f"dp = {dp}: sphfsi exited {p.returncode}: {p.stderr.read().decode()}")
-        import h5py
-        with h5py.File(os.path.join(out, "record.h5"), "r", locking=False) as f:
-            particles = int(f["participants/fluid"].attrs["particles"])
-        return particles, coordinator, fluid
-    finally:
-        shutil.rmtree(out, ignore_errors=True)
+    # stderr goes to a file: a pipe nobody reads while the run goes on would stall the run once full
+    with tempfile.TemporaryFile() as err:
+        try:
+            p = subprocess.Popen([sphfsi, "run", os.path.join(ROOT, "scenarios", "dam_break.toml"), "--out", out,
+                                  "--overwrite", "--quiet", "--set", f"fluid.dp={dp}", "--set", "run.end_time=0.0005",
+                                  "--set", "run.output_interval=0.0005"], stdout=subprocess.DEVNULL, stderr=err)
+            coordinator = fluid = 0
+            # The peaks only grow, so the last reading before each process ends is its peak (to within what it
+            # adds in its last 0.1 s; the coordinator then only closes the record).
+            while p.poll() is None:
+                coordinator = peak_kib(p.pid) or coordinator
+                for c in children(p.pid):
+                    fluid = peak_kib(c) or fluid
+                time.sleep(0.1)
+            if p.returncode != 0:
+                err.seek(0)
+                raise SystemExit(f"dp = {dp}: sphfsi exited {p.returncode}: {err.read().decode(errors='replace')}")
+            if fluid == 0 or coordinator == 0:
+                raise SystemExit(f"dp = {dp}: no peak read for the {'fluid participant' if fluid == 0 else 'coordinator'} "
+                                 "(it ended before the first 0.1 s reading?): use a finer dp")
+            import h5py
+            with h5py.File(os.path.join(out, "record.h5"), "r", locking=False) as f:
+                particles = int(f["participants/fluid"].attrs["particles"])
+            return particles, coordinator, fluid
+        finally:
+            shutil.rmtree(out, ignore_errors=True)
 
 
 def main():
