@@ -32,6 +32,14 @@ Model build_model(const StructureConfig& config) {
     const double A = sec.depth * sec.thickness;
     const double I = sec.depth * sec.thickness * sec.thickness * sec.thickness / 12.0;
 
+    // Where members meet: a member end joins any node already there, and an interior node joins an end
+    // already there (the member listed first may be either), so the order of `members` does not matter.
+    // Interior nodes of two members that merely cross are not joined: the schema joins members at their ends.
+    std::vector<char> is_end;
+    auto end_node_at = [&](const Vec2& p) {
+        const int id = model.node_at({p.x(), p.y()});
+        return id >= 0 && is_end[static_cast<std::size_t>(id)] ? id : -1;
+    };
     std::set<std::pair<int, int>> element_keys;
     for (std::size_t mi = 0; mi < config.members.size(); ++mi) {
         const auto& ms = config.members[mi];
@@ -41,11 +49,14 @@ Model build_model(const StructureConfig& config) {
         std::vector<int> ids;
         for (int k = 0; k <= ms.n_elements; ++k) {
             Vec2 p = a + (static_cast<double>(k) / ms.n_elements) * (b - a);
-            int id = (k == 0 || k == ms.n_elements) ? model.node_at({p.x(), p.y()}) : -1;
+            const bool end = k == 0 || k == ms.n_elements;
+            int id = end ? model.node_at({p.x(), p.y()}) : end_node_at(p);
             if (id < 0) {
                 id = model.node_count();
                 model.nodes.push_back(p);
+                is_end.push_back(0);
             }
+            if (end) is_end[static_cast<std::size_t>(id)] = 1;
             ids.push_back(id);
         }
         std::vector<int> elems;

@@ -4,6 +4,8 @@
 // measured errors are ~1e-12 and printed.
 #include <doctest/doctest.h>
 
+#include <cmath>
+
 #include "scenes.hpp"
 #include "sphfsi/protocol/solver.hpp"
 #include "sphfsi/structure/frame_dynamics.hpp"
@@ -105,6 +107,32 @@ TEST_CASE("two members, rigid corner: L-frame tip deflection P L^3/(3EI) + P L^2
     const double EA = E * t;
     check_close("tip deflection", dof(f, {L, H}, 1), P * L * L * L / (3 * EI) + P * L * L * H / EI + P * H / EA, 1e-3);
     check_close("corner sway", dof(f, {0, H}, 0), -P * L * H * H / (2 * EI), 1e-3);
+}
+
+TEST_CASE("a post standing on a beam's interior node is joined to it, whichever member is listed first") {
+    // Beam (0,0)-(L,0) clamped at both ends; post (L/2,0)-(L/2,H) carrying P at its top. By symmetry the
+    // joint does not rotate, so the post is a bar: top deflection = midspan P L^3 / (192 EI) + P H / (EA).
+    // Until 2026-11-27 an interior node never joined a node already there: with the post listed first it
+    // stood on a node of its own, unconnected, and the static solve found it free.
+    const double H = 0.5, EA = E * t;
+    const Value beam_member = table({{"start", vec(0, 0)}, {"end", vec(L, 0)}, {"n_elements", Value(4)}});
+    const Value post = table({{"start", vec(L / 2, 0)}, {"end", vec(L / 2, H)}, {"n_elements", Value(2)}});
+    for (const bool post_first : {false, true}) {
+        CAPTURE(post_first);
+        Value s = beam(4, "clamped", "clamped");
+        set(s, "members", Value(post_first ? Value::Array{post, beam_member} : Value::Array{beam_member, post}));
+        set(s, "point_loads", Value(Value::Array{point_load(L / 2, H, 0, P)}));
+        const auto f = solve(s);
+        CHECK(f.model().node_count() == 7);  // 5 + 3, the joint shared
+        CHECK(f.modes().rigid_body == 0);
+        check_close("post top", dof(f, {L / 2, H}, 1), P * L * L * L / (192 * EI) + P * H / EA, 1e-3);
+        CHECK(std::abs(dof(f, {L / 2, 0}, 2)) <= 1e-12);  // no joint rotation
+    }
+    // Two members crossing at interior nodes are not joined: the schema joins members at their ends.
+    Value x = beam(2, "");
+    set(x, "members", Value(Value::Array{table({{"start", vec(0, 0)}, {"end", vec(L, 0)}, {"n_elements", Value(2)}}),
+                                         table({{"start", vec(L / 2, -0.5)}, {"end", vec(L / 2, 0.5)}, {"n_elements", Value(2)}})}));
+    CHECK(FrameDynamics(config(x)).model().node_count() == 6);
 }
 
 TEST_CASE("a structure without supports has no static equilibrium: bad_config") {
