@@ -112,6 +112,10 @@ void check_combinations(const Value& fluid, const std::string& path, Errors& err
         errors.add(&pressure, "key '" + key(path, "pressure.kernel_correction") +
                                   "': corrects the pressure term of standard SPH and WCSPH; PCISPH's pressure force is its own; "
                                   "allowed with pressure.model = \"pcisph\": false");
+    if (density.at("reinitialise_every").as_int() != 0 && method != "continuity")
+        errors.add(&density, "key '" + key(path, "density.reinitialise_every") +
+                                 "': re-initialises integrated densities; it needs density.method = \"continuity\" "
+                                 "(allowed otherwise: 0)");
     if (density.at("diffusion").as_string() != "none" && method != "continuity")
         errors.add(&density, "key '" + key(path, "density.diffusion") +
                                  "': density diffusion (delta-SPH) is a term of the continuity equation; it needs "
@@ -281,6 +285,11 @@ TableSchema build() {
                    "Fourtakas et al. (2019) which diffuses only the non-hydrostatic part")
         .fallback("none");
     density.number("delta", "density diffusion coefficient").at_least(0).fallback(0.1);
+    density.integer("reinitialise_every",
+                    "continuity only: every this many steps, replace the integrated densities by the \"shepard\" "
+                    "method's sums of the positions then, which depend on the positions alone (Colagrossi & "
+                    "Landrini 2003 instead filter the integrated densities every 20 - 30 steps); 0 = never")
+        .at_least(0).at_most(1000000).fallback(0);
 
     TableSchema& viscosity = s.table("viscosity", "viscous term");
     viscosity.choice("model", {"none", "artificial", "morris", "mueller"},

@@ -87,6 +87,7 @@ FluidSettings read_settings(const sphfsi::Value& raw) {
     s.diffusion = pick(d.at("diffusion").as_string(), {"none", "molteni", "fourtakas"},
                        {DensityDiffusion::None, DensityDiffusion::Molteni, DensityDiffusion::Fourtakas});
     s.delta = d.at("delta").as_double();
+    s.reinitialise_every = static_cast<int>(d.at("reinitialise_every").as_int());
 
     const auto& v = f.at("viscosity");
     s.viscosity = pick(v.at("model").as_string(), {"none", "artificial", "morris", "mueller"},

@@ -60,6 +60,22 @@ Simulation2D::V Simulation2D::boundary_acceleration(std::uint32_t w) const {
     return solid_acc_[static_cast<std::size_t>(P.id[w] - first_solid_id_)];
 }
 
+void Simulation2D::reinitialise_densities() {
+    // Integrated densities drift away from what the particles' spacing says over long runs (the wind basin's
+    // lee-wall ridge, docs/validation.md): replace them by the CSPM sums of the positions now held, fluid and,
+    // in the dummy model (whose walls integrate densities too), boundary particles. The step's rates belong to
+    // the old densities, so the next step evaluates afresh. Checkpoints keep the step count: a resumed run
+    // re-initialises at the same steps.
+    auto& P = st_.P;
+    move_solids(st_.t);
+    sort_particles();
+    with_kernels<Dim>(s_.kernel, h_, [&](const auto& kw, const auto&) {
+        summation_density(P, grid_, kw, summation_mass_, true, nullptr, rho_scratch_);
+        summation_density(P, grid_, kw, summation_mass_, s_.wall == WallModel::Dummy, &rho_scratch_, P.rho);
+    });
+    st_.rates_fresh = false;
+}
+
 void Simulation2D::evaluate() {
     auto& P = st_.P;
     move_solids(st_.t);

@@ -245,6 +245,8 @@ double Simulation2D::take_step(double dt, bool adaptive, WindowStats& ws) {
         case Integrator::PredictorCorrector: step_predictor_corrector(dt); break;
     }
     ++st_.step;
+    if (continuity_ && s_.reinitialise_every > 0 && st_.step % static_cast<std::uint64_t>(s_.reinitialise_every) == 0)
+        reinitialise_densities();
     const double rho_max = check_state();
     if (s_.pressure != PressureModel::Pcisph)
         ws.max_density_error = std::max(ws.max_density_error, (std::max(rho_max, st_.rho_max) - s_.rho0) / s_.rho0);

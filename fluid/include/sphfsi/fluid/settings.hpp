@@ -60,6 +60,7 @@ struct FluidSettings {
     DensityMethod density = DensityMethod::Continuity;
     DensityDiffusion diffusion = DensityDiffusion::None;
     double delta = 0.1;
+    int reinitialise_every = 0;  // continuity: densities replaced by CSPM sums every N steps (0: never)
 
     ViscosityModel viscosity = ViscosityModel::Artificial;
     double alpha = 0.01, nu = 1e-6;

@@ -120,6 +120,7 @@ private:
     }
     double boundary_density(double p) const;
     void sort_particles();
+    void reinitialise_densities();
     void move_solids(double t);
     void reduce_rates();
     double take_step(double dt, bool adaptive, WindowStats& ws);
