@@ -94,6 +94,9 @@ void Simulation2D::step_verlet(double dt) {
     kick();
     drift(dt);
     st_.t += dt;
+    // A re-initialisation due at the end of this step comes before its evaluation, which the closing half-kick
+    // and the next step use; after the step it would throw that evaluation away.
+    if (reinitialisation_due(st_.step + 1)) reinitialise_densities();
     evaluate();
     accumulate_solid_forces(half);
     kick();
@@ -245,8 +248,8 @@ double Simulation2D::take_step(double dt, bool adaptive, WindowStats& ws) {
         case Integrator::PredictorCorrector: step_predictor_corrector(dt); break;
     }
     ++st_.step;
-    if (continuity_ && s_.reinitialise_every > 0 && st_.step % static_cast<std::uint64_t>(s_.reinitialise_every) == 0)
-        reinitialise_densities();
+    // Velocity Verlet re-initialises inside its step, before its one evaluation (step_verlet).
+    if (s_.integrator != Integrator::VelocityVerlet && reinitialisation_due(st_.step)) reinitialise_densities();
     const double rho_max = check_state();
     if (s_.pressure != PressureModel::Pcisph)
         ws.max_density_error = std::max(ws.max_density_error, (std::max(rho_max, st_.rho_max) - s_.rho0) / s_.rho0);

@@ -121,6 +121,10 @@ private:
     double boundary_density(double p) const;
     void sort_particles();
     void reinitialise_densities();
+    // density.reinitialise_every: whether the step that ends with step count `step` re-initialises.
+    bool reinitialisation_due(std::uint64_t step) const {
+        return continuity_ && s_.reinitialise_every > 0 && step % static_cast<std::uint64_t>(s_.reinitialise_every) == 0;
+    }
     void move_solids(double t);
     void reduce_rates();
     double take_step(double dt, bool adaptive, WindowStats& ws);
