@@ -140,7 +140,7 @@ Modes subspace_modes(const Model& model, const SparseMatrix& K, const SparseMatr
     count = std::min(count, n - r);
 
     // One run of subspace iteration with p vectors; `change` is the last relative change of the `count` lowest
-    // Ritz values, +inf when the projected eigenproblem failed or gave a non-finite value.
+    // Ritz values, NaN when the projected eigenproblem failed or gave a non-finite value.
     struct Run {
         Eigen::VectorXd lambda;
         Eigen::MatrixXd X;
@@ -171,7 +171,7 @@ Modes subspace_modes(const Model& model, const SparseMatrix& K, const SparseMatr
             Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (Kp + Kp.transpose()),
                                                                           0.5 * (Mp + Mp.transpose()));
             if (es.info() != Eigen::Success || !es.eigenvalues().allFinite()) {
-                run.change = std::numeric_limits<double>::infinity();
+                run.change = std::numeric_limits<double>::quiet_NaN();
                 return run;
             }
             run.X = Y * es.eigenvectors();
@@ -185,17 +185,23 @@ Modes subspace_modes(const Model& model, const SparseMatrix& K, const SparseMatr
         }
         return run;
     };
-    // Bathe's subspace size first; a run that has not settled in 200 iterations (the wanted modes' ratio to
-    // the first one left out is close to 1, or the projected problem broke down) is repeated with twice the
-    // vectors, up to all n - r, where the Ritz values are exact. Only then is it an error.
+    // Bathe's subspace size first. A run that has not settled in 200 iterations (the wanted modes' ratio to
+    // the first one left out is close to 1) is repeated with twice and then four times the vectors (at most
+    // n - r, where the Ritz values are exact); more would cost dense work of order n p^2 for little. A projected
+    // problem that broke down is an error at once: more vectors do not mend a K that is nearly singular.
+    const int p0 = std::min(n - r, std::max(2 * count, count + 8));
     Run run;
-    for (int p = std::min(n - r, std::max(2 * count, count + 8));; p = std::min(n - r, 2 * p)) {
+    for (int p = p0;; p = std::min(n - r, 2 * p)) {
         run = iterate(p);
         if (run.change <= 1e-8) break;
-        if (p == n - r)
+        if (std::isnan(run.change))
+            throw protocol::SolverError("internal", "structure: the modal analysis broke down (the projected "
+                                                    "eigenproblem with " + std::to_string(p) +
+                                                    " vectors failed or gave non-finite values)");
+        if (p == n - r || p >= 4 * p0)
             throw protocol::SolverError("internal", "structure: the modal analysis did not converge in 200 subspace "
-                                                    "iterations with all " + std::to_string(p) +
-                                                    " vectors (relative change " + std::to_string(run.change) + ")");
+                                                    "iterations with " + std::to_string(p) + " vectors (relative change " +
+                                                    std::to_string(run.change) + ")");
     }
     Modes modes;
     modes.omega2 = Eigen::VectorXd::Zero(r + count);

@@ -1,5 +1,6 @@
 #include "sphfsi/structure/model.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <utility>
@@ -32,13 +33,17 @@ Model build_model(const StructureConfig& config) {
     const double A = sec.depth * sec.thickness;
     const double I = sec.depth * sec.thickness * sec.thickness * sec.thickness / 12.0;
 
-    // Where members meet: a member end joins any node already there, and an interior node joins an end
-    // already there (the member listed first may be either), so the order of `members` does not matter.
-    // Interior nodes of two members that merely cross are not joined: the schema joins members at their ends.
-    std::vector<char> is_end;
-    auto end_node_at = [&](const Vec2& p) {
-        const int id = model.node_at({p.x(), p.y()});
-        return id >= 0 && is_end[static_cast<std::size_t>(id)] ? id : -1;
+    // Where members meet: a node at any member's end point (this member's or another's, listed before or after)
+    // joins the node already there, so the order of `members` does not matter. Interior nodes of members that
+    // merely cross, where no member ends, stay apart: the schema joins members at their ends.
+    std::vector<Vec2> member_ends;
+    for (const auto& m : config.members) {
+        member_ends.emplace_back(m.start[0], m.start[1]);
+        member_ends.emplace_back(m.end[0], m.end[1]);
+    }
+    const double joint_tol = 1e-6 * size;  // node_at's tolerance
+    auto at_a_member_end = [&](const Vec2& p) {
+        return std::any_of(member_ends.begin(), member_ends.end(), [&](const Vec2& e) { return (e - p).norm() <= joint_tol; });
     };
     std::set<std::pair<int, int>> element_keys;
     for (std::size_t mi = 0; mi < config.members.size(); ++mi) {
@@ -49,14 +54,12 @@ Model build_model(const StructureConfig& config) {
         std::vector<int> ids;
         for (int k = 0; k <= ms.n_elements; ++k) {
             Vec2 p = a + (static_cast<double>(k) / ms.n_elements) * (b - a);
-            const bool end = k == 0 || k == ms.n_elements;
-            int id = end ? model.node_at({p.x(), p.y()}) : end_node_at(p);
+            const bool joint = k == 0 || k == ms.n_elements || at_a_member_end(p);
+            int id = joint ? model.node_at({p.x(), p.y()}) : -1;
             if (id < 0) {
                 id = model.node_count();
                 model.nodes.push_back(p);
-                is_end.push_back(0);
             }
-            if (end) is_end[static_cast<std::size_t>(id)] = 1;
             ids.push_back(id);
         }
         std::vector<int> elems;

@@ -133,6 +133,16 @@ TEST_CASE("a post standing on a beam's interior node is joined to it, whichever 
     set(x, "members", Value(Value::Array{table({{"start", vec(0, 0)}, {"end", vec(L, 0)}, {"n_elements", Value(2)}}),
                                          table({{"start", vec(L / 2, -0.5)}, {"end", vec(L / 2, 0.5)}, {"n_elements", Value(2)}})}));
     CHECK(FrameDynamics(config(x)).model().node_count() == 6);
+    // Two members crossing at interior nodes where a third ends: all three joined, in every order (until the
+    // review of 2026-11-27, the order crossing, crossing, ending left the second crossing member apart).
+    const Value a = table({{"start", vec(0, 0)}, {"end", vec(L, 0)}, {"n_elements", Value(2)}});
+    const Value c = table({{"start", vec(L / 2, -0.5)}, {"end", vec(L / 2, 0.5)}, {"n_elements", Value(2)}});
+    const Value b = table({{"start", vec(L / 2, 0)}, {"end", vec(L, 1)}, {"n_elements", Value(1)}});
+    for (const auto& order : {Value::Array{a, b, c}, Value::Array{a, c, b}, Value::Array{b, a, c}, Value::Array{c, a, b}}) {
+        Value three = beam(2, "");
+        set(three, "members", Value(order));
+        CHECK(FrameDynamics(config(three)).model().node_count() == 6);  // 3 + 3 + 2, the centre shared by all
+    }
 }
 
 TEST_CASE("a structure without supports has no static equilibrium: bad_config") {
