@@ -15,7 +15,9 @@ namespace sphfsi::fluid {
 namespace {
 
 // The participant's checkpoint opens with "SPHFSIP2" (little-endian u64). Checkpoints of builds before
-// 2026-11-27 opened with the simulation state itself ("SPHFSIF1") and lack the start displacement.
+// 2026-11-26 opened with the simulation state itself ("SPHFSIF1") and lack the start displacement: refused as
+// written by an older build. Those of the builds of 2026-11-26/27 between commits 1244f65 and d6467fe opened
+// with the displacement's length and are refused as not a sphfsi-fluid checkpoint.
 constexpr std::uint64_t checkpoint_magic = 0x3250495346485053ULL;         // "SPHFSIP2"
 constexpr std::uint64_t older_checkpoint_magic = 0x3146495346485053ULL;   // "SPHFSIF1"
 

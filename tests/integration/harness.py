@@ -150,7 +150,8 @@ def main(module_globals):
     # child's stderr (a participant can outlive its SIGKILLed coordinator for a moment and hold the pipe open),
     # and CPython can then abort at shutdown ("could not acquire lock ... at interpreter shutdown, possibly due
     # to daemon threads", python/cpython#86883). On 2026-11-27 integration.resume failed once in a full suite
-    # run with no test failing and no folder kept for inspection, which is what that abort looks like.
+    # run with no test failing and no folder kept for inspection, as that abort would; its output was not
+    # kept, so the cause is likely, not proven.
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(1 if failed else 0)
