@@ -60,19 +60,26 @@ Simulation2D::V Simulation2D::boundary_acceleration(std::uint32_t w) const {
     return solid_acc_[static_cast<std::size_t>(P.id[w] - first_solid_id_)];
 }
 
+template <class KernelW>
+void Simulation2D::sum_densities(const KernelW& kw, bool cspm) {
+    // Written in place: a particle's sum reads no density but its own (a boundary particle keeps it).
+    const std::vector<double>* volumes = nullptr;
+    if (cspm) {
+        summation_density(st_.P, grid_, kw, summation_mass_, true, nullptr, rho_scratch_);  // plain sums: the volumes
+        volumes = &rho_scratch_;
+    }
+    summation_density(st_.P, grid_, kw, summation_mass_, s_.wall == WallModel::Dummy, volumes, st_.P.rho);
+}
+
 void Simulation2D::reinitialise_densities() {
     // Integrated densities drift away from what the particles' spacing says over long runs (the wind basin's
     // lee-wall ridge, docs/validation.md): replace them by the CSPM sums of the positions now held, fluid and,
     // in the dummy model (whose walls integrate densities too), boundary particles. The step's rates belong to
     // the old densities, so the next step evaluates afresh. Checkpoints keep the step count: a resumed run
     // re-initialises at the same steps.
-    auto& P = st_.P;
     move_solids(st_.t);
     sort_particles();
-    with_kernels<Dim>(s_.kernel, h_, [&](const auto& kw, const auto&) {
-        summation_density(P, grid_, kw, summation_mass_, true, nullptr, rho_scratch_);
-        summation_density(P, grid_, kw, summation_mass_, s_.wall == WallModel::Dummy, &rho_scratch_, P.rho);
-    });
+    with_kernels<Dim>(s_.kernel, h_, [&](const auto& kw, const auto&) { sum_densities(kw, true); });
     st_.rates_fresh = false;
 }
 
@@ -86,15 +93,7 @@ void Simulation2D::evaluate() {
     const bool dummy = s_.wall == WallModel::Dummy;
     const bool summation = s_.density != DensityMethod::Continuity;
     with_kernels<Dim>(s_.kernel, h_, [&](const auto& kw, const auto& kg) {
-        if (summation) {
-            // Written in place: a particle's sum reads no density but its own (a boundary particle keeps it).
-            const std::vector<double>* volumes = nullptr;
-            if (s_.density == DensityMethod::Shepard) {
-                summation_density(P, grid_, kw, summation_mass_, true, nullptr, rho_scratch_);  // plain sums: the volumes
-                volumes = &rho_scratch_;
-            }
-            summation_density(P, grid_, kw, summation_mass_, dummy, volumes, P.rho);
-        }
+        if (summation) sum_densities(kw, s_.density == DensityMethod::Shepard);
         // Pressures of fluid particles and (dummy model) boundary particles from the equation of state.
         // PCISPH's pressures come from its solve in the step; P.p keeps those of the last step taken (zero
         // before the first), which is what the record shows, and fill_rate_factors leaves them out of

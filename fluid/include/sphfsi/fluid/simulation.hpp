@@ -121,6 +121,10 @@ private:
     double boundary_density(double p) const;
     void sort_particles();
     void reinitialise_densities();
+    // Densities summed from the positions now held into P.rho (simulation_rates.cpp): plain, or CSPM-normalised
+    // with the plain sums' volumes (in rho_scratch_); boundary particles get their own in the dummy model only.
+    template <class KernelW>
+    void sum_densities(const KernelW& kw, bool cspm);
     // density.reinitialise_every: whether the step that ends with step count `step` re-initialises.
     bool reinitialisation_due(std::uint64_t step) const {
         return continuity_ && s_.reinitialise_every > 0 && step % static_cast<std::uint64_t>(s_.reinitialise_every) == 0;
