@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "sphfsi/coordinator/ordered_file.hpp"
+
 namespace sphfsi::coordinator::h5 {
 namespace {
 hid_t check(hid_t id, const std::string& what) {
@@ -107,8 +109,8 @@ std::size_t Series::row_bytes() const {
 }
 
 Handle create_file(const std::string& path) {
-    // Metadata reaches the disk only when we flush (after each frame): with evictions off, the cache never
-    // writes a half-updated index in between, so a kill at any moment leaves the state of the last flush.
+    // Metadata reaches the disk only when we flush (after each frame), in an order that every kill leaves
+    // readable (ordered_file.cpp). Evictions off: the cache serialises each entry once, at the flush.
     Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "create file access properties");
     H5AC_cache_config_t mdc;
     mdc.version = H5AC__CURR_CACHE_CONFIG_VERSION;
@@ -121,12 +123,11 @@ Handle create_file(const std::string& path) {
     mdc.initial_size = 16 * 1024 * 1024;
     mdc.max_size = 64 * 1024 * 1024;
     H5Pset_mdc_config(fapl.get(), &mdc);
+    use_ordered_file_driver(fapl.get());  // every moment of a flush leaves a readable file (ordered_file.cpp)
     return Handle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose, "create " + path);
 }
 
-Handle open_file_rw(const std::string& path) {
-    return Handle(H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT), H5Fclose, "open " + path);
-}
+void flush(hid_t file) { check(H5Fflush(file, H5F_SCOPE_GLOBAL), "write the record to its file", 0); }
 
 void write_string(hid_t parent, const std::string& name, const std::string& text) {
     Handle type(H5Tcopy(H5T_C_S1), H5Tclose, "copy type");

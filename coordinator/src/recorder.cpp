@@ -58,7 +58,12 @@ Recorder::Recorder(std::filesystem::path file, const RunMetadata& meta, std::opt
     : file_(std::move(file)) {
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // we report HDF5 failures ourselves
     if (!resume_at) {
-        h5_ = h5::create_file(file_.string());
+        // Built beside its name, which it takes once it reads back: the first flush writes the superblock
+        // before the root group (ordered_file.cpp), so a kill inside it would leave a file no reader opens.
+        auto creating = file_;
+        creating += ".creating";
+        std::filesystem::remove(file_);  // a kill from here on leaves no record, never an earlier run's
+        h5_ = h5::create_file(creating.string());
         h5::write_string(h5_.get(), "scene", meta.scene_text);
         h5::set_attribute(h5_.get(), "scene_file", meta.scene_file);
         h5::set_attribute(h5_.get(), "overrides", meta.overrides);
@@ -67,6 +72,7 @@ Recorder::Recorder(std::filesystem::path file, const RunMetadata& meta, std::opt
         h5::set_attribute(h5_.get(), "protocol_version", static_cast<double>(meta.protocol_version));
         set_status("running");
         flush();
+        std::filesystem::rename(creating, file_);  // the open handle follows the file: it is the same inode
         return;
     }
     // The interrupted run may have been killed in the middle of a write, so its file is not appended to:
@@ -267,7 +273,7 @@ std::size_t Recorder::frames(const std::string& role) const {
 
 void Recorder::set_status(const std::string& status) {
     h5::set_attribute(h5_.get(), "status", status);
-    H5Fflush(h5_.get(), H5F_SCOPE_GLOBAL);
+    h5::flush(h5_.get());
 }
 
 void Recorder::set_number(const std::string& name, double value) { h5::set_attribute(h5_.get(), name, value); }
@@ -287,7 +293,7 @@ void Recorder::flush() {
         force_buffer_.clear();
         interface_rows_buffered_ = 0;
     }
-    H5Fflush(h5_.get(), H5F_SCOPE_GLOBAL);
+    h5::flush(h5_.get());
 }
 
 // XDMF 3 sidecar: a temporal collection of point clouds read straight from the HDF5 datasets.

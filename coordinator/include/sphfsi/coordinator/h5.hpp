@@ -52,8 +52,10 @@ private:
     bool is_int_ = false;
 };
 
+// A new file whose every flush can be interrupted: killed at any moment, the writer leaves a file that reads
+// back with its last flush whole and, of the flush under way, at most some new rows (ordered_file.hpp).
 Handle create_file(const std::string& path);
-Handle open_file_rw(const std::string& path);
+void flush(hid_t file);  // throws if HDF5 cannot write everything held (a full disk)
 void write_string(hid_t parent, const std::string& name, const std::string& text);  // scalar UTF-8 dataset
 void set_attribute(hid_t object, const std::string& name, const std::string& value);
 void set_attribute(hid_t object, const std::string& name, double value);

@@ -1,0 +1,251 @@
+#include "sphfsi/coordinator/ordered_file.hpp"
+
+// Why a driver of our own. HDF5 writes a flush in the order of its metadata cache, the superblock last,
+// and that order is not safe to stop: killed in between, a file's chunk index pointed at a chunk beyond the
+// end of the allocated space the superblock still announced ("addr overflow" in every reader), a new
+// index node's parent was on disk before the node ("wrong B-tree signature"), a group listed a dataset
+// whose header was not there yet. HDF5 only guarantees order to SWMR readers, and SWMR's superblock
+// marks a killed writer's file "open for write" to every plain reader.
+//
+// This driver (after HDF5's default "sec2" one: plain pread/pwrite on one file) writes raw data at once,
+// as sec2 does, but holds metadata in memory until the flush ends, then writes it in an order in which
+// every prefix is a readable file:
+//   1. the superblock: its end of allocation now covers all that follows (the file is extended first, as
+//      a superblock announcing more than the file holds reads as truncated);
+//   2. metadata in space allocated since the last flush, which nothing on disk refers to yet;
+//   3. rewritten metadata in older space, things referred to before what refers to them: local and global
+//      heaps (link names, string attribute values), then B-trees (chunk indexes, group tables; a parent
+//      before its children, which lie at higher addresses), then object headers (a dataset's row count
+//      last, so that its new row is indexed before it is counted).
+// The file shrinks, when HDF5 asks for it, only after all that. The metadata accumulator and the space
+// aggregators are not offered (query below): the one would merge writes of all three kinds into one, the
+// other would hand back unused space at a flush and have it reused for new metadata at old addresses.
+// integration.record_kill kills a recording before each one of its writes and reads the file each time.
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+#include <vector>
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace sphfsi::coordinator::h5 {
+namespace {
+
+struct PendingWrite {
+    H5FD_mem_t type;
+    haddr_t addr;
+    std::vector<unsigned char> bytes;
+};
+
+struct OrderedFile {
+    H5FD_t pub;  // first member: HDF5 holds an OrderedFile* as its H5FD_t*
+    int fd = -1;
+    dev_t device = 0;
+    ino_t inode = 0;
+    haddr_t eoa = 0;        // end of the space HDF5 has allocated
+    haddr_t eof = 0;        // the file's length on disk
+    haddr_t published = 0;  // the end of allocation in the superblock on disk
+    bool shrink_wanted = false;
+    std::vector<PendingWrite> pending;  // metadata written since the last flush, in HDF5's order
+};
+
+OrderedFile& of(H5FD_t* f) { return *reinterpret_cast<OrderedFile*>(f); }
+const OrderedFile& of(const H5FD_t* f) { return *reinterpret_cast<const OrderedFile*>(f); }
+
+bool write_all(OrderedFile& f, haddr_t at, const unsigned char* p, std::size_t n) {
+    while (n > 0) {
+        const ssize_t k = pwrite(f.fd, p, n, static_cast<off_t>(at));
+        if (k < 0 && errno == EINTR) continue;
+        if (k <= 0) return false;
+        p += k;
+        n -= static_cast<std::size_t>(k);
+        at += static_cast<haddr_t>(k);
+    }
+    f.eof = std::max(f.eof, at);
+    return true;
+}
+
+bool set_length(OrderedFile& f, haddr_t length) {
+    if (ftruncate(f.fd, static_cast<off_t>(length)) != 0) return false;
+    f.eof = length;
+    return true;
+}
+
+// The place of a held write in the order of the header comment.
+int stage(const PendingWrite& w, haddr_t published) {
+    if (w.type == H5FD_MEM_SUPER && w.addr == 0) return 0;
+    if (w.addr >= published) return 1;
+    if (w.type == H5FD_MEM_LHEAP || w.type == H5FD_MEM_GHEAP) return 2;
+    if (w.type == H5FD_MEM_BTREE) return 3;
+    return 4;
+}
+
+bool release(OrderedFile& f) {
+    if (f.eof < f.eoa && !set_length(f, f.eoa)) return false;
+    std::stable_sort(f.pending.begin(), f.pending.end(), [&](const PendingWrite& a, const PendingWrite& b) {
+        return stage(a, f.published) < stage(b, f.published);
+    });
+    bool superblock = false;
+    for (const PendingWrite& w : f.pending) {
+        if (!write_all(f, w.addr, w.bytes.data(), w.bytes.size())) return false;
+        superblock = superblock || stage(w, f.published) == 0;
+    }
+    f.pending.clear();
+    if (superblock) f.published = f.eoa;
+    if (f.shrink_wanted && f.eof > f.eoa && f.published == f.eoa && !set_length(f, f.eoa)) return false;
+    f.shrink_wanted = false;
+    return true;
+}
+
+H5FD_t* open_file(const char* name, unsigned flags, hid_t, haddr_t) {
+    int mode = (flags & H5F_ACC_RDWR) ? O_RDWR : O_RDONLY;
+    if (flags & H5F_ACC_TRUNC) mode |= O_TRUNC;
+    if (flags & H5F_ACC_CREAT) mode |= O_CREAT;
+    if (flags & H5F_ACC_EXCL) mode |= O_EXCL;
+    const int fd = ::open(name, mode | O_CLOEXEC, 0666);  // not inherited by the participants we start
+    struct stat st;
+    if (fd < 0) return nullptr;
+    if (fstat(fd, &st) != 0) {
+        ::close(fd);
+        return nullptr;
+    }
+    auto* f = new OrderedFile{};
+    f->fd = fd;
+    f->device = st.st_dev;
+    f->inode = st.st_ino;
+    f->eof = f->published = static_cast<haddr_t>(st.st_size);
+    return &f->pub;
+}
+
+herr_t close_file(H5FD_t* file) {
+    OrderedFile* f = &of(file);
+    const bool written = release(*f);
+    const bool closed = ::close(f->fd) == 0;
+    delete f;
+    return written && closed ? 0 : -1;
+}
+
+int compare(const H5FD_t* a, const H5FD_t* b) {
+    const auto key = [](const OrderedFile& f) { return std::make_pair(f.device, f.inode); };
+    return key(of(a)) < key(of(b)) ? -1 : key(of(b)) < key(of(a)) ? 1 : 0;
+}
+
+herr_t query(const H5FD_t*, unsigned long* flags) {
+    *flags = H5FD_FEAT_DATA_SIEVE | H5FD_FEAT_POSIX_COMPAT_HANDLE | H5FD_FEAT_DEFAULT_VFD_COMPATIBLE;
+    return 0;
+}
+
+haddr_t get_eoa(const H5FD_t* file, H5FD_mem_t) { return of(file).eoa; }
+
+herr_t set_eoa(H5FD_t* file, H5FD_mem_t, haddr_t addr) {
+    of(file).eoa = addr;
+    return 0;
+}
+
+haddr_t get_eof(const H5FD_t* file, H5FD_mem_t) {
+    const OrderedFile& f = of(file);
+    haddr_t end = f.eof;
+    for (const PendingWrite& w : f.pending) end = std::max(end, w.addr + w.bytes.size());
+    return end;
+}
+
+herr_t get_handle(H5FD_t* file, hid_t, void** handle) {
+    *handle = &of(file).fd;
+    return 0;
+}
+
+herr_t read(H5FD_t* file, H5FD_mem_t, hid_t, haddr_t addr, size_t size, void* buffer) {
+    const OrderedFile& f = of(file);
+    auto* out = static_cast<unsigned char*>(buffer);
+    for (std::size_t done = 0; done < size;) {
+        const ssize_t k = pread(f.fd, out + done, size - done, static_cast<off_t>(addr + done));
+        if (k < 0 && errno == EINTR) continue;
+        if (k < 0) return -1;
+        if (k == 0) {  // past the end of the file: zeros, as in sec2
+            std::memset(out + done, 0, size - done);
+            break;
+        }
+        done += static_cast<std::size_t>(k);
+    }
+    for (const PendingWrite& w : f.pending) {  // what is held, newest last, over what is on disk
+        const haddr_t from = std::max(addr, w.addr), to = std::min(addr + size, w.addr + w.bytes.size());
+        if (from < to) std::memcpy(out + (from - addr), w.bytes.data() + (from - w.addr), to - from);
+    }
+    return 0;
+}
+
+herr_t write(H5FD_t* file, H5FD_mem_t type, hid_t, haddr_t addr, size_t size, const void* buffer) {
+    OrderedFile& f = of(file);
+    const auto* p = static_cast<const unsigned char*>(buffer);
+    if (type == H5FD_MEM_DRAW) return write_all(f, addr, p, size) ? 0 : -1;  // nothing refers to it until a flush
+    f.pending.push_back({type, addr, std::vector<unsigned char>(p, p + size)});
+    return 0;
+}
+
+herr_t flush(H5FD_t* file, hid_t, hbool_t) { return release(of(file)) ? 0 : -1; }
+
+herr_t truncate(H5FD_t* file, hid_t, hbool_t) {
+    OrderedFile& f = of(file);
+    if (f.eof < f.eoa) return set_length(f, f.eoa) ? 0 : -1;
+    f.shrink_wanted = f.eof > f.eoa;  // once the superblock that says so is on disk: at the flush that follows
+    return 0;
+}
+
+herr_t lock(H5FD_t* file, hbool_t rw) {
+    if (flock(of(file).fd, (rw ? LOCK_EX : LOCK_SH) | LOCK_NB) == 0 || errno == ENOSYS) return 0;
+    return -1;
+}
+
+herr_t unlock(H5FD_t* file) {
+    if (flock(of(file).fd, LOCK_UN) == 0 || errno == ENOSYS) return 0;
+    return -1;
+}
+
+const H5FD_class_t kOrderedFile = {
+    .name = "sphfsi_ordered",
+    .maxaddr = (static_cast<haddr_t>(1) << (8 * sizeof(off_t) - 1)) - 1,
+    .fc_degree = H5F_CLOSE_WEAK,
+    .terminate = nullptr,
+    .sb_size = nullptr,
+    .sb_encode = nullptr,
+    .sb_decode = nullptr,
+    .fapl_size = 0,
+    .fapl_get = nullptr,
+    .fapl_copy = nullptr,
+    .fapl_free = nullptr,
+    .dxpl_size = 0,
+    .dxpl_copy = nullptr,
+    .dxpl_free = nullptr,
+    .open = open_file,
+    .close = close_file,
+    .cmp = compare,
+    .query = query,
+    .get_type_map = nullptr,
+    .alloc = nullptr,
+    .free = nullptr,
+    .get_eoa = get_eoa,
+    .set_eoa = set_eoa,
+    .get_eof = get_eof,
+    .get_handle = get_handle,
+    .read = read,
+    .write = write,
+    .flush = flush,
+    .truncate = truncate,
+    .lock = lock,
+    .unlock = unlock,
+    .fl_map = H5FD_FLMAP_DICHOTOMY,
+};
+}  // namespace
+
+void use_ordered_file_driver(hid_t fapl) {
+    static const hid_t driver = H5FDregister(&kOrderedFile);
+    if (driver < 0 || H5Pset_driver(fapl, driver, nullptr) < 0)
+        throw std::runtime_error("HDF5: cannot use the record's file driver");
+}
+
+}  // namespace sphfsi::coordinator::h5
