@@ -1,0 +1,38 @@
+/* Preloaded into record_writer by integration.record_kill: the process SIGKILLs itself just before its
+ * K-th write to a file (K = $SPHFSI_KILL_AT_WRITE), so a test can stop a recording between any two of the
+ * writes HDF5 makes, one after another, instead of hoping a timed kill lands in a flush. HDF5's default
+ * driver writes with pwrite and sizes the file with ftruncate: both count. At exit, without a kill, it
+ * prints how many there were ("writes: N") on stderr. */
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <sys/types.h>
+#include <unistd.h>
+
+static long writes;
+
+static void count_and_maybe_die(void) {
+    static long kill_at = -1;
+    if (kill_at < 0) {
+        const char* k = getenv("SPHFSI_KILL_AT_WRITE");
+        kill_at = k ? atol(k) : 0;
+    }
+    if (++writes == kill_at) raise(SIGKILL);
+}
+
+#define FORWARD(name, ret, params, args)                                   \
+    ret name params {                                                      \
+        static ret(*real) params;                                          \
+        if (!real) real = (ret(*) params)dlsym(RTLD_NEXT, #name);          \
+        count_and_maybe_die();                                             \
+        return real args;                                                  \
+    }
+
+FORWARD(pwrite, ssize_t, (int fd, const void* buf, size_t n, off_t at), (fd, buf, n, at))
+FORWARD(pwrite64, ssize_t, (int fd, const void* buf, size_t n, off64_t at), (fd, buf, n, at))
+FORWARD(ftruncate, int, (int fd, off_t size), (fd, size))
+FORWARD(ftruncate64, int, (int fd, off64_t size), (fd, size))
+
+__attribute__((destructor)) static void report(void) { fprintf(stderr, "writes: %ld\n", writes); }
