@@ -99,7 +99,7 @@ Modes dense_modes(const Model& model, const SparseMatrix& K, const SparseMatrix&
     return modes;
 }
 
-Modes subspace_modes(const Model& model, const SparseMatrix& K, const SparseMatrix& M, int count) {
+Modes subspace_modes(const Model& model, const SparseMatrix& K, const SparseMatrix& M, int count, int max_iterations) {
     const SparseMatrix Kr = model.T.transpose() * K * model.T;
     const SparseMatrix Mr = model.T.transpose() * M * model.T;
     const int n = static_cast<int>(Kr.rows());
@@ -156,7 +156,7 @@ Modes subspace_modes(const Model& model, const SparseMatrix& K, const SparseMatr
         }
         deflate(run.X);
         run.lambda = Eigen::VectorXd::Constant(p, -1.0);
-        for (int iteration = 0; iteration < 200; ++iteration) {
+        for (int iteration = 0; iteration < max_iterations; ++iteration) {
             const Eigen::MatrixXd MX = Mr * run.X;
             // M X is M-orthogonal to the rigid modes (self-equilibrated), so the reactions at the held
             // coordinates are zero and the grounded solve solves K Y = M X itself; its rigid part is removed.
@@ -199,8 +199,9 @@ Modes subspace_modes(const Model& model, const SparseMatrix& K, const SparseMatr
                                                     "eigenproblem with " + std::to_string(p) +
                                                     " vectors failed or gave non-finite values)");
         if (p == n - r || p >= 4 * p0)
-            throw protocol::SolverError("internal", "structure: the modal analysis did not converge in 200 subspace "
-                                                    "iterations with " + std::to_string(p) + " vectors (relative change " +
+            throw protocol::SolverError("internal", "structure: the modal analysis did not converge in " +
+                                                    std::to_string(max_iterations) + " subspace iterations with " +
+                                                    std::to_string(p) + " vectors (relative change " +
                                                     std::to_string(run.change) + ")");
     }
     Modes modes;
@@ -210,6 +211,7 @@ Modes subspace_modes(const Model& model, const SparseMatrix& K, const SparseMatr
     shapes << rigid, run.X.leftCols(count);
     modes.shapes = model.T * shapes;
     modes.rigid_body = r;
+    modes.vectors = static_cast<int>(run.X.cols());
     return modes;
 }
 

@@ -130,22 +130,49 @@ TEST_CASE("a fine free or pinned beam: the elastic modes by subspace iteration, 
     }
 }
 
+// The portal frame of the next two tests: three members welded at the knees (228 free DOFs, above the dense
+// limit of 150) on a roller whose normal is not along an axis, with a pin or without.
+FrameDynamics portal_frame(bool pinned) {
+    Value s = beam(4, "");
+    set(s, "members", Value(Value::Array{
+        table({{"start", vec(0, 0)}, {"end", vec(0, L)}, {"n_elements", Value(25)}}),
+        table({{"start", vec(0, L)}, {"end", vec(L, L)}, {"n_elements", Value(25)}}),
+        table({{"start", vec(L, L)}, {"end", vec(L, 0)}, {"n_elements", Value(25)}})}));
+    Value::Array supports{table({{"at", vec(L, 0)}, {"type", Value("roller")}, {"normal", vec(0.6, 0.8)}})};
+    if (pinned) supports.push_back(table({{"at", vec(0, 0)}, {"type", Value("pinned")}}));
+    set(s, "supports", Value(std::move(supports)));
+    return FrameDynamics(config(s));
+}
+
+TEST_CASE("a subspace run that does not settle is repeated with 2 and 4 times the vectors, then refused") {
+    // Bathe's size for 6 modes is max(2 * 6, 6 + 8) = 14 vectors, which settle (Ritz values to 1e-8) in 5
+    // iterations from this frame's deterministic start. Allowed fewer, the iteration must take more vectors,
+    // still give the dense solver's modes (to 1e-6, as below), and refuse when even 4 times as many fail.
+    const FrameDynamics f = portal_frame(true);
+    const Modes dense = dense_modes(f.model(), f.stiffness(), f.mass());
+    CHECK(subspace_modes(f.model(), f.stiffness(), f.mass(), 6).vectors == 14);
+    for (const auto& [iterations, vectors] : {std::pair<int, int>{4, 28}, {3, 56}}) {
+        CAPTURE(iterations);
+        const Modes sub = subspace_modes(f.model(), f.stiffness(), f.mass(), 6, iterations);
+        CHECK(sub.vectors == vectors);
+        for (int k = 0; k < 6; ++k) CHECK(sub.omega2[k] == doctest::Approx(dense.omega2[k]).epsilon(1e-6));
+    }
+    std::string refusal;
+    try {
+        subspace_modes(f.model(), f.stiffness(), f.mass(), 6, 1);
+    } catch (const std::exception& e) {
+        refusal = e.what();
+    }
+    CHECK(refusal.find("did not converge in 1 subspace iterations with 56 vectors") != std::string::npos);
+}
+
 TEST_CASE("subspace iteration on a portal frame with a skewed roller agrees with the dense solver") {
-    // Three members welded at the knees (228 free DOFs, above the dense limit of 150), a roller whose
-    // normal is not along an axis, and either a pin (no rigid mode) or nothing else (two rigid modes: the
-    // roller only stops motion along its normal). Tolerance as in the 40-element test above: the dense
-    // solver's relative error on the low modes is ~1e-8, so agreement to 1e-6.
+    // Either a pin (no rigid mode) or nothing but the roller (two rigid modes: it only stops motion along its
+    // normal). Tolerance as in the 40-element test above: the dense solver's relative error on the low modes
+    // is ~1e-8, so agreement to 1e-6.
     for (const auto& [pinned, rigid] : {std::pair<bool, int>{true, 0}, {false, 2}}) {
         CAPTURE(pinned);
-        Value s = beam(4, "");
-        set(s, "members", Value(Value::Array{
-            table({{"start", vec(0, 0)}, {"end", vec(0, L)}, {"n_elements", Value(25)}}),
-            table({{"start", vec(0, L)}, {"end", vec(L, L)}, {"n_elements", Value(25)}}),
-            table({{"start", vec(L, L)}, {"end", vec(L, 0)}, {"n_elements", Value(25)}})}));
-        Value::Array supports{table({{"at", vec(L, 0)}, {"type", Value("roller")}, {"normal", vec(0.6, 0.8)}})};
-        if (pinned) supports.push_back(table({{"at", vec(0, 0)}, {"type", Value("pinned")}}));
-        set(s, "supports", Value(std::move(supports)));
-        const FrameDynamics f(config(s));
+        const FrameDynamics f = portal_frame(pinned);
         REQUIRE(f.model().free_count() > 150);
         const Modes dense = dense_modes(f.model(), f.stiffness(), f.mass());
         const Modes sub = subspace_modes(f.model(), f.stiffness(), f.mass(), 6);
