@@ -108,7 +108,7 @@ std::size_t Series::row_bytes() const {
     return n;
 }
 
-Handle create_file(const std::string& path) {
+Handle create_file(const std::string& path, unsigned chunk_index_k) {
     // Metadata reaches the disk only when we flush (after each frame), in an order that every kill leaves
     // readable (ordered_file.cpp). Evictions off: the cache serialises each entry once, at the flush.
     Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "create file access properties");
@@ -124,7 +124,13 @@ Handle create_file(const std::string& path) {
     mdc.max_size = 64 * 1024 * 1024;
     H5Pset_mdc_config(fapl.get(), &mdc);
     use_ordered_file_driver(fapl.get());  // every moment of a flush leaves a readable file (ordered_file.cpp)
-    return Handle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose, "create " + path);
+    // No free-space manager: space HDF5 frees is not handed out again, as the file on disk may still refer
+    // to it until the flush (a little space is lost when an attribute or a group's name heap moves). This
+    // needs a version-2 superblock, which HDF5 1.8 and later read.
+    Handle fcpl(H5Pcreate(H5P_FILE_CREATE), H5Pclose, "create file creation properties");
+    check(H5Pset_file_space_strategy(fcpl.get(), H5F_FSPACE_STRATEGY_NONE, 0, 1), "set the file space strategy", 0);
+    if (chunk_index_k) check(H5Pset_istore_k(fcpl.get(), chunk_index_k), "set the chunk index size", 0);
+    return Handle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()), H5Fclose, "create " + path);
 }
 
 void flush(hid_t file) { check(H5Fflush(file, H5F_SCOPE_GLOBAL), "write the record to its file", 0); }
@@ -141,24 +147,37 @@ void write_string(hid_t parent, const std::string& name, const std::string& text
     check(H5Dwrite(ds.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, &p), "write " + name, 0);
 }
 
+namespace {
+// An attribute that exists with the same type is written over in place: deleting it and creating it again
+// rewrites the object header in two steps (a kill in between lost the attribute) and frees header space.
+void write_attribute(hid_t object, const std::string& name, hid_t file_type, hid_t memory_type, const void* value) {
+    if (H5Aexists(object, name.c_str()) > 0) {
+        Handle attr(H5Aopen(object, name.c_str(), H5P_DEFAULT), H5Aclose, "open attribute " + name);
+        Handle stored(H5Aget_type(attr.get()), H5Tclose, "get the type of attribute " + name);
+        if (H5Tequal(stored.get(), file_type) > 0) {
+            check(H5Awrite(attr.get(), memory_type, value), "write attribute " + name, 0);
+            return;
+        }
+        attr.reset();
+        check(H5Adelete(object, name.c_str()), "replace attribute " + name, 0);
+    }
+    Handle space(H5Screate(H5S_SCALAR), H5Sclose, "create space");
+    Handle attr(H5Acreate2(object, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
+                "create attribute " + name);
+    check(H5Awrite(attr.get(), memory_type, value), "write attribute " + name, 0);
+}
+}  // namespace
+
 void set_attribute(hid_t object, const std::string& name, const std::string& value) {
-    if (H5Aexists(object, name.c_str()) > 0) H5Adelete(object, name.c_str());
     Handle type(H5Tcopy(H5T_C_S1), H5Tclose, "copy type");
     H5Tset_size(type.get(), H5T_VARIABLE);
     H5Tset_cset(type.get(), H5T_CSET_UTF8);
-    Handle space(H5Screate(H5S_SCALAR), H5Sclose, "create space");
-    Handle attr(H5Acreate2(object, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
-                "create attribute " + name);
     const char* p = value.c_str();
-    check(H5Awrite(attr.get(), type.get(), &p), "write attribute " + name, 0);
+    write_attribute(object, name, type.get(), type.get(), &p);
 }
 
 void set_attribute(hid_t object, const std::string& name, double value) {
-    if (H5Aexists(object, name.c_str()) > 0) H5Adelete(object, name.c_str());
-    Handle space(H5Screate(H5S_SCALAR), H5Sclose, "create space");
-    Handle attr(H5Acreate2(object, name.c_str(), H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
-                "create attribute " + name);
-    check(H5Awrite(attr.get(), H5T_NATIVE_DOUBLE, &value), "write attribute " + name, 0);
+    write_attribute(object, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &value);
 }
 
 bool exists(hid_t parent, const std::string& path) {

@@ -7,25 +7,32 @@
 // whose header was not there yet. HDF5 only guarantees order to SWMR readers, and SWMR's superblock
 // marks a killed writer's file "open for write" to every plain reader.
 //
-// This driver (after HDF5's default "sec2" one: plain pread/pwrite on one file) writes raw data at once,
-// as sec2 does, but holds metadata in memory until the flush ends, then writes it in an order in which
-// every prefix is a readable file:
+// This driver (after HDF5's default "sec2" one: plain pread/pwrite on one file) writes raw data into newly
+// allocated space at once, as sec2 does, but holds everything else until the flush ends, then writes it in
+// an order in which every prefix is a readable file:
 //   1. the superblock: its end of allocation now covers all that follows (the file is extended first, as
 //      a superblock announcing more than the file holds reads as truncated);
-//   2. metadata in space allocated since the last flush, which nothing on disk refers to yet;
-//   3. rewritten metadata in older space, things referred to before what refers to them: local and global
-//      heaps (link names, string attribute values), then B-trees (chunk indexes, group tables; a parent
-//      before its children, which lie at higher addresses), then object headers (a dataset's row count
-//      last, so that its new row is indexed before it is counted).
-// The file shrinks, when HDF5 asks for it, only after all that. The metadata accumulator and the space
-// aggregators are not offered (query below): the one would merge writes of all three kinds into one, the
-// other would hand back unused space at a flush and have it reused for new metadata at old addresses.
+//   2. whatever lies in space allocated since the last flush, which nothing on disk refers to yet, and raw
+//      data rewritten in older space: rows beyond a dataset's extent, and global heap collections (string
+//      attribute values, which HDF5 hands to drivers as raw data);
+//   3. rewritten metadata in older space, things referred to before what refers to them: local heaps (link
+//      names), then B-tree nodes from the root down (a parent names a new child only once the child is
+//      written; a node that gave half its entries to a new sibling shrinks only after its parent names
+//      that sibling), group symbol-table nodes after the B-trees that lead to them, then object headers (a
+//      dataset's row count last, so that its new row is indexed before it is counted).
+// It never hands out again space that the file on disk may still refer to: the file is created with no
+// free-space manager (create_file), and the end of allocation never drops below what the disk announces.
+// The metadata accumulator and the space aggregators are not offered (query below): the one would merge
+// writes of all stages into one, the other would hand back unused space at a flush for reuse.
 // integration.record_kill kills a recording before each one of its writes and reads the file each time.
 
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <new>
 #include <stdexcept>
+#include <tuple>
+#include <type_traits>
 #include <vector>
 
 #include <fcntl.h>
@@ -51,8 +58,9 @@ struct OrderedFile {
     haddr_t eof = 0;        // the file's length on disk
     haddr_t published = 0;  // the end of allocation in the superblock on disk
     bool shrink_wanted = false;
-    std::vector<PendingWrite> pending;  // metadata written since the last flush, in HDF5's order
+    std::vector<PendingWrite> pending;  // held since the last flush, in HDF5's order
 };
+static_assert(std::is_standard_layout_v<OrderedFile>, "HDF5 holds a pointer to the first member");
 
 OrderedFile& of(H5FD_t* f) { return *reinterpret_cast<OrderedFile*>(f); }
 const OrderedFile& of(const H5FD_t* f) { return *reinterpret_cast<const OrderedFile*>(f); }
@@ -76,27 +84,36 @@ bool set_length(OrderedFile& f, haddr_t length) {
     return true;
 }
 
-// The place of a held write in the order of the header comment.
-int stage(const PendingWrite& w, haddr_t published) {
-    if (w.type == H5FD_MEM_SUPER && w.addr == 0) return 0;
-    if (w.addr >= published) return 1;
-    if (w.type == H5FD_MEM_LHEAP || w.type == H5FD_MEM_GHEAP) return 2;
-    if (w.type == H5FD_MEM_BTREE) return 3;
-    return 4;
+bool is_superblock(const PendingWrite& w) { return w.type == H5FD_MEM_SUPER && w.addr == 0; }
+
+// The place of a held write in the order of the header comment, earliest first.
+std::tuple<int, int> stage(const PendingWrite& w, haddr_t published) {
+    if (is_superblock(w)) return {0, 0};
+    if (w.addr >= published || w.type == H5FD_MEM_DRAW) return {1, 0};
+    if (w.type == H5FD_MEM_LHEAP) return {2, 0};
+    if (w.type == H5FD_MEM_BTREE) {
+        // A version-1 B-tree node starts "TREE", node type, level (HDF5 File Format Specification, III.A.1);
+        // anything else of this type is a symbol-table node ("SNOD"), a leaf of a group's B-tree.
+        const bool tree = w.bytes.size() > 5 && std::memcmp(w.bytes.data(), "TREE", 4) == 0;
+        return {3, tree ? -static_cast<int>(w.bytes[5]) : 1};
+    }
+    return {4, 0};
 }
 
-bool release(OrderedFile& f) {
+bool release(OrderedFile& f, bool closing = false) {
+    // A flush of some objects only (H5Dflush, which we do not call) leaves the superblock out: holding on
+    // until it comes keeps its end of allocation ahead of what it covers.
+    if (!closing && f.eoa != f.published && std::none_of(f.pending.begin(), f.pending.end(), is_superblock)) return true;
     if (f.eof < f.eoa && !set_length(f, f.eoa)) return false;
+    const haddr_t on_disk = f.published;
     std::stable_sort(f.pending.begin(), f.pending.end(), [&](const PendingWrite& a, const PendingWrite& b) {
-        return stage(a, f.published) < stage(b, f.published);
+        return stage(a, on_disk) < stage(b, on_disk);
     });
-    bool superblock = false;
     for (const PendingWrite& w : f.pending) {
         if (!write_all(f, w.addr, w.bytes.data(), w.bytes.size())) return false;
-        superblock = superblock || stage(w, f.published) == 0;
+        if (is_superblock(w)) f.published = f.eoa;
     }
     f.pending.clear();
-    if (superblock) f.published = f.eoa;
     if (f.shrink_wanted && f.eof > f.eoa && f.published == f.eoa && !set_length(f, f.eoa)) return false;
     f.shrink_wanted = false;
     return true;
@@ -114,7 +131,11 @@ H5FD_t* open_file(const char* name, unsigned flags, hid_t, haddr_t) {
         ::close(fd);
         return nullptr;
     }
-    auto* f = new OrderedFile{};
+    auto* f = new (std::nothrow) OrderedFile{};
+    if (!f) {
+        ::close(fd);
+        return nullptr;
+    }
     f->fd = fd;
     f->device = st.st_dev;
     f->inode = st.st_ino;
@@ -124,7 +145,7 @@ H5FD_t* open_file(const char* name, unsigned flags, hid_t, haddr_t) {
 
 herr_t close_file(H5FD_t* file) {
     OrderedFile* f = &of(file);
-    const bool written = release(*f);
+    const bool written = release(*f, true);
     const bool closed = ::close(f->fd) == 0;
     delete f;
     return written && closed ? 0 : -1;
@@ -143,7 +164,10 @@ herr_t query(const H5FD_t*, unsigned long* flags) {
 haddr_t get_eoa(const H5FD_t* file, H5FD_mem_t) { return of(file).eoa; }
 
 herr_t set_eoa(H5FD_t* file, H5FD_mem_t, haddr_t addr) {
-    of(file).eoa = addr;
+    // HDF5 lowers the end of allocation when it frees a block at the end; below what the disk announces,
+    // that block may still be referred to there, and allocating it again would overwrite it.
+    OrderedFile& f = of(file);
+    f.eoa = std::max(addr, f.published);
     return 0;
 }
 
@@ -182,8 +206,18 @@ herr_t read(H5FD_t* file, H5FD_mem_t, hid_t, haddr_t addr, size_t size, void* bu
 herr_t write(H5FD_t* file, H5FD_mem_t type, hid_t, haddr_t addr, size_t size, const void* buffer) {
     OrderedFile& f = of(file);
     const auto* p = static_cast<const unsigned char*>(buffer);
-    if (type == H5FD_MEM_DRAW) return write_all(f, addr, p, size) ? 0 : -1;  // nothing refers to it until a flush
-    f.pending.push_back({type, addr, std::vector<unsigned char>(p, p + size)});
+    // Raw data in new space: nothing refers to it until the flush.
+    if (type == H5FD_MEM_DRAW && addr >= f.published) return write_all(f, addr, p, size) ? 0 : -1;
+    try {
+        for (PendingWrite& w : f.pending)
+            if (w.addr == addr && w.type == type && w.bytes.size() == size) {  // the same entry again: its last bytes
+                w.bytes.assign(p, p + size);
+                return 0;
+            }
+        f.pending.push_back({type, addr, std::vector<unsigned char>(p, p + size)});
+    } catch (const std::bad_alloc&) {
+        return -1;
+    }
     return 0;
 }
 

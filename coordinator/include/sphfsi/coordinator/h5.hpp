@@ -54,7 +54,9 @@ private:
 
 // A new file whose every flush can be interrupted: killed at any moment, the writer leaves a file that reads
 // back with its last flush whole and, of the flush under way, at most some new rows (ordered_file.hpp).
-Handle create_file(const std::string& path);
+// `chunk_index_k`: half the entries of a chunk index node, 0 for HDF5's 32 (tests use 2, to reach deep
+// indexes in a few frames).
+Handle create_file(const std::string& path, unsigned chunk_index_k = 0);
 void flush(hid_t file);  // throws if HDF5 cannot write everything held (a full disk)
 void write_string(hid_t parent, const std::string& name, const std::string& text);  // scalar UTF-8 dataset
 void set_attribute(hid_t object, const std::string& name, const std::string& value);
