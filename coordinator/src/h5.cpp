@@ -133,7 +133,12 @@ Handle create_file(const std::string& path, unsigned chunk_index_k) {
     return Handle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()), H5Fclose, "create " + path);
 }
 
-void flush(hid_t file) { check(H5Fflush(file, H5F_SCOPE_GLOBAL), "write the record to its file", 0); }
+void flush(hid_t file) {
+    if (H5Fflush(file, H5F_SCOPE_GLOBAL) < 0)
+        throw std::runtime_error("HDF5: cannot write the record to its file (" +
+                                 (ordered_file_failure().empty() ? std::string("see HDF5") : ordered_file_failure()) +
+                                 "); it holds everything written before");
+}
 
 void write_string(hid_t parent, const std::string& name, const std::string& text) {
     Handle type(H5Tcopy(H5T_C_S1), H5Tclose, "copy type");

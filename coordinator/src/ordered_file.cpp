@@ -25,11 +25,19 @@
 // The metadata accumulator and the space aggregators are not offered (query below): the one would merge
 // writes of all stages into one, the other would hand back unused space at a flush for reuse.
 // integration.record_kill kills a recording before each one of its writes and reads the file each time.
+//
+// A write that fails (a full disk) leaves the file as it is and stops all later ones: HDF5 takes a write
+// the driver accepted as done, so writing on after a gap could mix two states. The file's new length is
+// reserved (fallocate) before anything is written, so a full disk is found before the first write of a
+// flush. The failing flush reports it; later ones fail too, except the one closing the file, which
+// succeeds writing nothing, since HDF5 1.10 frees a file whose closing flush failed yet keeps its
+// identifier (a crash when the library shuts down).
 
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <new>
+#include <string>
 #include <stdexcept>
 #include <tuple>
 #include <type_traits>
@@ -58,6 +66,7 @@ struct OrderedFile {
     haddr_t eof = 0;        // the file's length on disk
     haddr_t published = 0;  // the end of allocation in the superblock on disk
     bool shrink_wanted = false;
+    bool failed = false;  // a write failed: nothing more is written
     std::vector<PendingWrite> pending;  // held since the last flush, in HDF5's order
 };
 static_assert(std::is_standard_layout_v<OrderedFile>, "HDF5 holds a pointer to the first member");
@@ -65,11 +74,19 @@ static_assert(std::is_standard_layout_v<OrderedFile>, "HDF5 holds a pointer to t
 OrderedFile& of(H5FD_t* f) { return *reinterpret_cast<OrderedFile*>(f); }
 const OrderedFile& of(const H5FD_t* f) { return *reinterpret_cast<const OrderedFile*>(f); }
 
+std::string first_failure;  // of this process, for the error message
+
+bool fail(OrderedFile& f, const char* what) {
+    if (first_failure.empty()) first_failure = std::string(what) + ": " + std::strerror(errno);
+    f.failed = true;
+    return false;
+}
+
 bool write_all(OrderedFile& f, haddr_t at, const unsigned char* p, std::size_t n) {
     while (n > 0) {
         const ssize_t k = pwrite(f.fd, p, n, static_cast<off_t>(at));
         if (k < 0 && errno == EINTR) continue;
-        if (k <= 0) return false;
+        if (k <= 0) return fail(f, "cannot write");
         p += k;
         n -= static_cast<std::size_t>(k);
         at += static_cast<haddr_t>(k);
@@ -78,8 +95,12 @@ bool write_all(OrderedFile& f, haddr_t at, const unsigned char* p, std::size_t n
     return true;
 }
 
-bool set_length(OrderedFile& f, haddr_t length) {
-    if (ftruncate(f.fd, static_cast<off_t>(length)) != 0) return false;
+// Grows the file to `length` with its blocks allocated, so that no write below it can find the disk full.
+bool reserve(OrderedFile& f, haddr_t length) {
+    if (length <= f.eof) return true;
+    if (fallocate(f.fd, 0, static_cast<off_t>(f.eof), static_cast<off_t>(length - f.eof)) != 0 &&
+        ((errno != EOPNOTSUPP && errno != ENOSYS) || ftruncate(f.fd, static_cast<off_t>(length)) != 0))
+        return fail(f, "cannot grow the file");
     f.eof = length;
     return true;
 }
@@ -101,10 +122,11 @@ std::tuple<int, int> stage(const PendingWrite& w, haddr_t published) {
 }
 
 bool release(OrderedFile& f, bool closing = false) {
+    if (f.failed) return false;
     // A flush of some objects only (H5Dflush, which we do not call) leaves the superblock out: holding on
     // until it comes keeps its end of allocation ahead of what it covers.
     if (!closing && f.eoa != f.published && std::none_of(f.pending.begin(), f.pending.end(), is_superblock)) return true;
-    if (f.eof < f.eoa && !set_length(f, f.eoa)) return false;
+    if (!reserve(f, f.eoa)) return false;
     const haddr_t on_disk = f.published;
     std::stable_sort(f.pending.begin(), f.pending.end(), [&](const PendingWrite& a, const PendingWrite& b) {
         return stage(a, on_disk) < stage(b, on_disk);
@@ -114,7 +136,10 @@ bool release(OrderedFile& f, bool closing = false) {
         if (is_superblock(w)) f.published = f.eoa;
     }
     f.pending.clear();
-    if (f.shrink_wanted && f.eof > f.eoa && f.published == f.eoa && !set_length(f, f.eoa)) return false;
+    if (f.shrink_wanted && f.eof > f.eoa && f.published == f.eoa) {
+        if (ftruncate(f.fd, static_cast<off_t>(f.eoa)) != 0) return fail(f, "cannot shorten the file");
+        f.eof = f.eoa;
+    }
     f.shrink_wanted = false;
     return true;
 }
@@ -145,10 +170,10 @@ H5FD_t* open_file(const char* name, unsigned flags, hid_t, haddr_t) {
 
 herr_t close_file(H5FD_t* file) {
     OrderedFile* f = &of(file);
-    const bool written = release(*f, true);
-    const bool closed = ::close(f->fd) == 0;
+    release(*f, true);  // a failure is kept for the message (see the header comment for why not returned)
+    ::close(f->fd);
     delete f;
-    return written && closed ? 0 : -1;
+    return 0;
 }
 
 int compare(const H5FD_t* a, const H5FD_t* b) {
@@ -206,6 +231,7 @@ herr_t read(H5FD_t* file, H5FD_mem_t, hid_t, haddr_t addr, size_t size, void* bu
 herr_t write(H5FD_t* file, H5FD_mem_t type, hid_t, haddr_t addr, size_t size, const void* buffer) {
     OrderedFile& f = of(file);
     const auto* p = static_cast<const unsigned char*>(buffer);
+    if (f.failed) return 0;  // dropped: the file keeps the state of its last whole flush
     // Raw data in new space: nothing refers to it until the flush.
     if (type == H5FD_MEM_DRAW && addr >= f.published) return write_all(f, addr, p, size) ? 0 : -1;
     try {
@@ -216,16 +242,18 @@ herr_t write(H5FD_t* file, H5FD_mem_t type, hid_t, haddr_t addr, size_t size, co
             }
         f.pending.push_back({type, addr, std::vector<unsigned char>(p, p + size)});
     } catch (const std::bad_alloc&) {
-        return -1;
+        errno = ENOMEM;
+        return fail(f, "cannot hold a write") ? 0 : -1;
     }
     return 0;
 }
 
-herr_t flush(H5FD_t* file, hid_t, hbool_t) { return release(of(file)) ? 0 : -1; }
+herr_t flush(H5FD_t* file, hid_t, hbool_t closing) { return release(of(file)) || closing ? 0 : -1; }
 
-herr_t truncate(H5FD_t* file, hid_t, hbool_t) {
+herr_t truncate(H5FD_t* file, hid_t, hbool_t closing) {
     OrderedFile& f = of(file);
-    if (f.eof < f.eoa) return set_length(f, f.eoa) ? 0 : -1;
+    if (f.failed) return closing ? 0 : -1;
+    if (f.eof < f.eoa) return reserve(f, f.eoa) || closing ? 0 : -1;
     f.shrink_wanted = f.eof > f.eoa;  // once the superblock that says so is on disk: at the flush that follows
     return 0;
 }
@@ -275,6 +303,8 @@ const H5FD_class_t kOrderedFile = {
     .fl_map = H5FD_FLMAP_DICHOTOMY,
 };
 }  // namespace
+
+const std::string& ordered_file_failure() { return first_failure; }
 
 void use_ordered_file_driver(hid_t fapl) {
     static const hid_t driver = H5FDregister(&kOrderedFile);

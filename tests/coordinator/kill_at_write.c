@@ -1,7 +1,7 @@
 /* Preloaded into record_writer by integration.record_kill: the process SIGKILLs itself just before its
  * K-th write to a file (K = $SPHFSI_KILL_AT_WRITE), so a test can stop a recording between any two of the
- * writes HDF5 makes, one after another, instead of hoping a timed kill lands in a flush. HDF5's default
- * driver writes with pwrite and sizes the file with ftruncate: both count. At exit, without a kill, it
+ * writes the recorder makes, one after another, instead of hoping a timed kill lands in a flush. Writes
+ * are pwrite; the file is sized with ftruncate and fallocate: all three count. At exit, without a kill, it
  * prints how many there were ("writes: N") on stderr. */
 #define _GNU_SOURCE
 #include <dlfcn.h>
@@ -34,5 +34,7 @@ FORWARD(pwrite, ssize_t, (int fd, const void* buf, size_t n, off_t at), (fd, buf
 FORWARD(pwrite64, ssize_t, (int fd, const void* buf, size_t n, off64_t at), (fd, buf, n, at))
 FORWARD(ftruncate, int, (int fd, off_t size), (fd, size))
 FORWARD(ftruncate64, int, (int fd, off64_t size), (fd, size))
+FORWARD(fallocate, int, (int fd, int mode, off_t at, off_t n), (fd, mode, at, n))
+FORWARD(fallocate64, int, (int fd, int mode, off64_t at, off64_t n), (fd, mode, at, n))
 
 __attribute__((destructor)) static void report(void) { fprintf(stderr, "writes: %ld\n", writes); }

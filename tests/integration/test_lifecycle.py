@@ -1,6 +1,6 @@
 """Lifecycle: participants that crash, hang, talk garbage or speak another version are named within
 the timeout and every process exits; strays are refused and logged; SIGINT and SIGKILL leave a
-readable record. All sockets are on 127.0.0.1 and every wait is bounded."""
+readable record, and so does a disk that fills. All sockets are on 127.0.0.1 and every wait is bounded."""
 import os
 import random
 import signal
@@ -255,6 +255,29 @@ def test_sigkill_at_random_moments_leaves_a_readable_record():
             read = []  # and so does every other dataset, whole
             f.visititems(lambda name, obj: read.append(obj[()]) if hasattr(obj, "shape") else None)
             assert len(read) > 20, len(read)
+
+
+def test_a_record_that_cannot_grow_stops_the_run_and_reads_back():
+    # A full disk, as a file-size limit (RLIMIT_FSIZE, SIGXFSZ ignored, so writes past it fail with EFBIG):
+    # the dam break's frames are ~0.4 MB, so a 2 MB record fills within a few frames.
+    import resource
+    import subprocess
+
+    def limited():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (2_000_000, 2_000_000))
+
+    out = harness.out_dir("full")
+    scene = os.path.join(harness.ROOT, "scenarios", "dam_break.toml")
+    p = subprocess.run([os.path.join(harness.BIN, "sphfsi"), "run", scene, "--out", out, "--quiet", "--set",
+                        "run.end_time=0.3"], capture_output=True, text=True, timeout=120, preexec_fn=limited)
+    assert p.returncode == 1, (p.returncode, p.stderr)
+    assert "cannot write the record to its file (cannot write: File too large)" in p.stderr, p.stderr
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert 1 <= len(f["frames/fluid/time"]) < 6
+        read = []
+        f.visititems(lambda name, obj: read.append(obj[()]) if hasattr(obj, "shape") else None)
+        assert f.attrs["status"] == "running"  # the record holds the state of its last whole flush
 
 
 def test_listen_mode_waits_for_a_remote_participant():

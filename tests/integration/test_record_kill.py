@@ -2,7 +2,7 @@
 
 integration.lifecycle SIGKILLs a running coordinator at random moments, and rarely lands inside a flush.
 Here record_writer (tests/coordinator) writes a recording with kill_at_write preloaded: run k dies just
-before the file's k-th write (pwrite or ftruncate), for every k of a whole recording. Two recordings:
+before the file's k-th write (pwrite, ftruncate or fallocate), for every k of a whole recording. Two recordings:
 - the coordinator's Recorder: 70 frames of two participants with their windows and interface rows, enough
   for the indexes of one-frame chunks to split (a chunk index node holds 64 chunks);
 - the record's file layer alone with chunk index nodes of 4 entries, so that 70 frames make the indexes 4
