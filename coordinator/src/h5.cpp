@@ -13,11 +13,13 @@ hid_t check(hid_t id, const std::string& what) {
 void check(herr_t rc, const std::string& what, int) {
     if (rc < 0) throw std::runtime_error("HDF5: cannot " + what);
 }
-Handle link_creation_props() {
-    Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose, "create link properties");
-    H5Pset_create_intermediate_group(lcpl.get(), 1);
-    return lcpl;
-}
+// Room for the link names a group gets over a run, so that its name heap never has to move: a moved heap
+// is two pieces on disk (header and names), and a kill between their writes left the group unreadable
+// (ordered_file.cpp). HDF5's own size holds about 5 names. The root group takes it from the file's
+// creation properties.
+constexpr std::size_t kNameHeapBytes = 1024;
+
+
 }  // namespace
 
 Handle::Handle(hid_t id, herr_t (*close)(hid_t), const std::string& what) : id_(check(id, what)), close_(close) {}
@@ -53,8 +55,8 @@ Series::Series(hid_t parent, const std::string& path, std::vector<hsize_t> row_s
         H5Pset_shuffle(dcpl.get());
         H5Pset_deflate(dcpl.get(), 1);  // cheap compression: frames are written while the run goes on
     }
-    Handle lcpl = link_creation_props();
-    ds_ = Handle(H5Dcreate2(parent, path.c_str(), is_int ? H5T_STD_I32LE : H5T_IEEE_F64LE, space.get(), lcpl.get(),
+    create_groups(parent, path.substr(0, path.rfind('/') == std::string::npos ? 0 : path.rfind('/')));
+    ds_ = Handle(H5Dcreate2(parent, path.c_str(), is_int ? H5T_STD_I32LE : H5T_IEEE_F64LE, space.get(), H5P_DEFAULT,
                             dcpl.get(), H5P_DEFAULT),
                  H5Dclose, "create dataset " + path);
 }
@@ -125,9 +127,10 @@ Handle create_file(const std::string& path, unsigned chunk_index_k) {
     H5Pset_mdc_config(fapl.get(), &mdc);
     use_ordered_file_driver(fapl.get());  // every moment of a flush leaves a readable file (ordered_file.cpp)
     // No free-space manager: space HDF5 frees is not handed out again, as the file on disk may still refer
-    // to it until the flush (a little space is lost when an attribute or a group's name heap moves). This
-    // needs a version-2 superblock, which HDF5 1.8 and later read.
+    // to it until the flush (a little space is lost when an attribute changes type). This takes a
+    // version-2 superblock with a file-space message, which HDF5 1.10 and later read (1.8 may not).
     Handle fcpl(H5Pcreate(H5P_FILE_CREATE), H5Pclose, "create file creation properties");
+    check(H5Pset_local_heap_size_hint(fcpl.get(), kNameHeapBytes), "size the root group's name heap", 0);
     check(H5Pset_file_space_strategy(fcpl.get(), H5F_FSPACE_STRATEGY_NONE, 0, 1), "set the file space strategy", 0);
     if (chunk_index_k) check(H5Pset_istore_k(fcpl.get(), chunk_index_k), "set the chunk index size", 0);
     return Handle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()), H5Fclose, "create " + path);
@@ -145,8 +148,8 @@ void write_string(hid_t parent, const std::string& name, const std::string& text
     H5Tset_size(type.get(), H5T_VARIABLE);
     H5Tset_cset(type.get(), H5T_CSET_UTF8);
     Handle space(H5Screate(H5S_SCALAR), H5Sclose, "create space");
-    Handle lcpl = link_creation_props();
-    Handle ds(H5Dcreate2(parent, name.c_str(), type.get(), space.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
+    create_groups(parent, name.substr(0, name.rfind('/') == std::string::npos ? 0 : name.rfind('/')));
+    Handle ds(H5Dcreate2(parent, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
               "create " + name);
     const char* p = text.c_str();
     check(H5Dwrite(ds.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, &p), "write " + name, 0);
@@ -183,6 +186,17 @@ void set_attribute(hid_t object, const std::string& name, const std::string& val
 
 void set_attribute(hid_t object, const std::string& name, double value) {
     write_attribute(object, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &value);
+}
+
+void create_groups(hid_t parent, const std::string& path) {
+    Handle gcpl(H5Pcreate(H5P_GROUP_CREATE), H5Pclose, "create group creation properties");
+    check(H5Pset_local_heap_size_hint(gcpl.get(), kNameHeapBytes), "size a group's name heap", 0);
+    for (std::size_t end = path.find('/', 1); ; end = path.find('/', end + 1)) {
+        const std::string prefix = path.substr(0, end);
+        if (!prefix.empty() && prefix != "/" && !exists(parent, prefix))
+            Handle(H5Gcreate2(parent, prefix.c_str(), H5P_DEFAULT, gcpl.get(), H5P_DEFAULT), H5Gclose, "create group " + prefix);
+        if (end == std::string::npos) break;
+    }
 }
 
 bool exists(hid_t parent, const std::string& path) {

@@ -10,7 +10,7 @@
 // This driver (after HDF5's default "sec2" one: plain pread/pwrite on one file) writes raw data into newly
 // allocated space at once, as sec2 does, but holds everything else until the flush ends, then writes it in
 // an order in which every prefix is a readable file:
-//   1. the superblock: its end of allocation now covers all that follows (the file is extended first, as
+//   1. the superblock: its end of allocation now covers all that follows (the file is lengthened first, as
 //      a superblock announcing more than the file holds reads as truncated);
 //   2. whatever lies in space allocated since the last flush, which nothing on disk refers to yet, and raw
 //      data rewritten in older space: rows beyond a dataset's extent, and global heap collections (string
@@ -22,14 +22,19 @@
 //      dataset's row count last, so that its new row is indexed before it is counted).
 // It never hands out again space that the file on disk may still refer to: the file is created with no
 // free-space manager (create_file), and the end of allocation never drops below what the disk announces.
+// A local heap (a group's link names) that has moved is two pieces, rewritten one after the other: groups
+// are created with room for their names (create_groups) so that theirs never move once on disk.
 // The metadata accumulator and the space aggregators are not offered (query below): the one would merge
 // writes of all stages into one, the other would hand back unused space at a flush for reuse.
 // integration.record_kill kills a recording before each one of its writes and reads the file each time.
 //
+// The order protects against a killed process ("a run stopped at any moment", docs/record.md), not against a crash of the operating system or a power cut: that would take an fdatasync between the
+// stages, a cost at every frame that we have not taken.
+//
 // A write that fails (a full disk) leaves the file as it is and stops all later ones: HDF5 takes a write
 // the driver accepted as done, so writing on after a gap could mix two states. The file's new length is
 // reserved (fallocate) before anything is written, so a full disk is found before the first write of a
-// flush. The failing flush reports it; later ones fail too, except the one closing the file, which
+// flush (reserve). The failing flush reports it; later ones fail too, except the one closing the file, which
 // succeeds writing nothing, since HDF5 1.10 frees a file whose closing flush failed yet keeps its
 // identifier (a crash when the library shuts down).
 
@@ -95,13 +100,18 @@ bool write_all(OrderedFile& f, haddr_t at, const unsigned char* p, std::size_t n
     return true;
 }
 
-// Grows the file to `length` with its blocks allocated, so that no write below it can find the disk full.
-bool reserve(OrderedFile& f, haddr_t length) {
-    if (length <= f.eof) return true;
-    if (fallocate(f.fd, 0, static_cast<off_t>(f.eof), static_cast<off_t>(length - f.eof)) != 0 &&
-        ((errno != EOPNOTSUPP && errno != ENOSYS) || ftruncate(f.fd, static_cast<off_t>(length)) != 0))
-        return fail(f, "cannot grow the file");
-    f.eof = length;
+// Allocates the blocks of [published, eoa), the space a flush may write below its end, growing the file to
+// `eoa`: no write of the flush can then find the disk full. (Where the file system cannot allocate ahead,
+// the file is only lengthened, and a full disk shows at a write, still after a readable prefix.)
+bool reserve(OrderedFile& f) {
+    if (f.eoa <= f.published) return true;
+    if (fallocate(f.fd, 0, static_cast<off_t>(f.published), static_cast<off_t>(f.eoa - f.published)) == 0) {
+        f.eof = std::max(f.eof, f.eoa);
+        return true;
+    }
+    if (errno != EOPNOTSUPP && errno != ENOSYS) return fail(f, "cannot grow the file");
+    if (f.eof < f.eoa && ftruncate(f.fd, static_cast<off_t>(f.eoa)) != 0) return fail(f, "cannot grow the file");
+    f.eof = std::max(f.eof, f.eoa);
     return true;
 }
 
@@ -126,7 +136,7 @@ bool release(OrderedFile& f, bool closing = false) {
     // A flush of some objects only (H5Dflush, which we do not call) leaves the superblock out: holding on
     // until it comes keeps its end of allocation ahead of what it covers.
     if (!closing && f.eoa != f.published && std::none_of(f.pending.begin(), f.pending.end(), is_superblock)) return true;
-    if (!reserve(f, f.eoa)) return false;
+    if (!reserve(f)) return false;
     const haddr_t on_disk = f.published;
     std::stable_sort(f.pending.begin(), f.pending.end(), [&](const PendingWrite& a, const PendingWrite& b) {
         return stage(a, on_disk) < stage(b, on_disk);
@@ -235,11 +245,8 @@ herr_t write(H5FD_t* file, H5FD_mem_t type, hid_t, haddr_t addr, size_t size, co
     // Raw data in new space: nothing refers to it until the flush.
     if (type == H5FD_MEM_DRAW && addr >= f.published) return write_all(f, addr, p, size) ? 0 : -1;
     try {
-        for (PendingWrite& w : f.pending)
-            if (w.addr == addr && w.type == type && w.bytes.size() == size) {  // the same entry again: its last bytes
-                w.bytes.assign(p, p + size);
-                return 0;
-            }
+        // The same entry again replaces the one held, and goes last, as it was written last.
+        std::erase_if(f.pending, [&](const PendingWrite& w) { return w.addr == addr && w.type == type && w.bytes.size() == size; });
         f.pending.push_back({type, addr, std::vector<unsigned char>(p, p + size)});
     } catch (const std::bad_alloc&) {
         errno = ENOMEM;
@@ -253,7 +260,7 @@ herr_t flush(H5FD_t* file, hid_t, hbool_t closing) { return release(of(file)) ||
 herr_t truncate(H5FD_t* file, hid_t, hbool_t closing) {
     OrderedFile& f = of(file);
     if (f.failed) return closing ? 0 : -1;
-    if (f.eof < f.eoa) return reserve(f, f.eoa) || closing ? 0 : -1;
+    if (f.eof < f.eoa) return reserve(f) || closing ? 0 : -1;
     f.shrink_wanted = f.eof > f.eoa;  // once the superblock that says so is on disk: at the flush that follows
     return 0;
 }

@@ -178,11 +178,7 @@ h5::Series& Recorder::series(const std::string& path, const std::vector<hsize_t>
 void Recorder::set_participant(const std::string& role, const std::string& software, const Value& info) {
     check_info_keys("", info);
     std::string path = "/participants/" + role;
-    if (!h5::exists(h5_.get(), path)) {
-        h5::Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose, "lcpl");
-        H5Pset_create_intermediate_group(lcpl.get(), 1);
-        h5::Handle g(H5Gcreate2(h5_.get(), path.c_str(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT), H5Gclose, "create " + path);
-    }
+    h5::create_groups(h5_.get(), path);
     h5::Handle g(H5Gopen2(h5_.get(), path.c_str(), H5P_DEFAULT), H5Gclose, "open " + path);
     h5::set_attribute(g.get(), "software", software);
     write_value_attributes(g.get(), "", info);

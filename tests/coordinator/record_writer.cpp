@@ -5,7 +5,9 @@
 //   record_writer FILE PARTICLES FRAMES
 //   record_writer --deep-index FILE PARTICLES FRAMES
 // The second writes fluid frames through the record's file layer alone (h5::create_file, Series, flush)
-// with chunk index nodes of 4 entries instead of 64, so that 70 frames make indexes 4 levels deep.
+// with chunk index nodes of 4 entries instead of 64, so that 70 frames make indexes 4 levels deep; with
+// each of the first 12 frames it also adds a dataset of a long name to /extras (more names than a group's
+// name heap holds by default, added one flush after another).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -46,6 +48,11 @@ int write_deep_index(const std::string& path, std::uint64_t n, int frames) {
         position.append(p.values.data(), 1);
         tag.append(k.values.data(), 1);
         time.append(&t, 1);
+        if (frame < 12) {
+            const double value = frame;
+            h5::Series(file.get(), "/extras/a_dataset_whose_name_takes_room_" + std::to_string(frame), {}, false, 1, false)
+                .append(&value, 1);
+        }
         h5::flush(file.get());
     }
     return 0;

@@ -6,7 +6,9 @@ before the file's k-th write (pwrite, ftruncate or fallocate), for every k of a 
 - the coordinator's Recorder: 70 frames of two participants with their windows and interface rows, enough
   for the indexes of one-frame chunks to split (a chunk index node holds 64 chunks);
 - the record's file layer alone with chunk index nodes of 4 entries, so that 70 frames make the indexes 4
-  levels deep (a parent's update and its child's must reach the disk in the right order at every level).
+  levels deep (a parent's update and its child's must reach the disk in the right order at every level),
+  and a dataset added to one group with each of the first 12 frames (a group's names outgrowing the room
+  HDF5 gives them by default, one flush after another).
 Each kill must leave no record (killed before the record's first flush was done) or one that opens, whose
 every dataset reads back holding what was written (a row counted before its data was indexed would read as
 zeros), losing at most the frame being flushed.
@@ -48,7 +50,11 @@ def frames_in(path, deep):
             assert np.array_equal(t[:, 0], 1e-3 * np.arange(n))
             assert np.allclose(read["frames/fluid/position"][:n, :, 0], np.cos(t + np.arange(PARTICLES)), atol=1e-12)
             assert np.array_equal(read["frames/fluid/tag"][:n], (np.arange(PARTICLES) + np.arange(n)[:, None]) % 7)
-        if not deep:
+        if deep:
+            for name, data in read.items():
+                if name.startswith("extras/"):
+                    assert list(data) in ([], [int(name.rsplit("_", 1)[1])]), (name, data)
+        else:
             m = frames["structure"]
             assert np.array_equal(read.get("frames/structure/y", np.zeros((0, 8, 2)))[:m, 0, 0],
                                   read.get("frames/structure/time", []))

@@ -61,6 +61,8 @@ void flush(hid_t file);  // throws if HDF5 cannot write everything held (a full 
 void write_string(hid_t parent, const std::string& name, const std::string& text);  // scalar UTF-8 dataset
 void set_attribute(hid_t object, const std::string& name, const std::string& value);
 void set_attribute(hid_t object, const std::string& name, double value);
+// The group `path` and the groups above it that are missing, each with room for a run's link names.
+void create_groups(hid_t parent, const std::string& path);
 bool exists(hid_t parent, const std::string& path);
 // Names of the links in `group` ("/frames" -> {"fluid", "structure"}); empty if it does not exist.
 std::vector<std::string> children(hid_t file, const std::string& group);
