@@ -19,7 +19,10 @@ void check(herr_t rc, const std::string& what, int) {
 // creation properties.
 constexpr std::size_t kNameHeapBytes = 1024;
 
-
+std::string parent_of(const std::string& path) {  // "/frames/fluid/tag" -> "/frames/fluid"; "scene" -> ""
+    const std::size_t slash = path.rfind('/');
+    return slash == std::string::npos ? std::string() : path.substr(0, slash);
+}
 }  // namespace
 
 Handle::Handle(hid_t id, herr_t (*close)(hid_t), const std::string& what) : id_(check(id, what)), close_(close) {}
@@ -55,7 +58,7 @@ Series::Series(hid_t parent, const std::string& path, std::vector<hsize_t> row_s
         H5Pset_shuffle(dcpl.get());
         H5Pset_deflate(dcpl.get(), 1);  // cheap compression: frames are written while the run goes on
     }
-    create_groups(parent, path.substr(0, path.rfind('/') == std::string::npos ? 0 : path.rfind('/')));
+    create_groups(parent, parent_of(path));
     ds_ = Handle(H5Dcreate2(parent, path.c_str(), is_int ? H5T_STD_I32LE : H5T_IEEE_F64LE, space.get(), H5P_DEFAULT,
                             dcpl.get(), H5P_DEFAULT),
                  H5Dclose, "create dataset " + path);
@@ -148,7 +151,7 @@ void write_string(hid_t parent, const std::string& name, const std::string& text
     H5Tset_size(type.get(), H5T_VARIABLE);
     H5Tset_cset(type.get(), H5T_CSET_UTF8);
     Handle space(H5Screate(H5S_SCALAR), H5Sclose, "create space");
-    create_groups(parent, name.substr(0, name.rfind('/') == std::string::npos ? 0 : name.rfind('/')));
+    create_groups(parent, parent_of(name));
     Handle ds(H5Dcreate2(parent, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
               "create " + name);
     const char* p = text.c_str();

@@ -11,9 +11,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <string>
-
 #include <filesystem>
+#include <string>
 
 #include "sphfsi/coordinator/recorder.hpp"
 
