@@ -42,8 +42,8 @@
 #include <cerrno>
 #include <cstring>
 #include <new>
-#include <string>
 #include <stdexcept>
+#include <string>
 #include <tuple>
 #include <type_traits>
 #include <vector>
@@ -91,6 +91,7 @@ bool write_all(OrderedFile& f, haddr_t at, const unsigned char* p, std::size_t n
     while (n > 0) {
         const ssize_t k = pwrite(f.fd, p, n, static_cast<off_t>(at));
         if (k < 0 && errno == EINTR) continue;
+        if (k == 0) errno = EIO;  // no progress and no reason given
         if (k <= 0) return fail(f, "cannot write");
         p += k;
         n -= static_cast<std::size_t>(k);
