@@ -3,8 +3,8 @@
 integration.lifecycle SIGKILLs a running coordinator at random moments, and rarely lands inside a flush.
 Here record_writer (tests/coordinator) writes a recording with kill_at_write preloaded: run k dies just
 before the file's k-th write (pwrite, ftruncate or fallocate), for every k of a whole recording. Two recordings:
-- the coordinator's Recorder: 70 frames of two participants with their windows and interface rows, enough
-  for the indexes of one-frame chunks to split (a chunk index node holds 64 chunks);
+- the coordinator's Recorder: 24 frames of two participants with their windows and interface rows (its
+  creation, first frames and windows, and the frames after them);
 - the record's file layer alone with chunk index nodes of 4 entries, so that 70 frames make the indexes 4
   levels deep (a parent's update and its child's must reach the disk in the right order at every level),
   and a dataset added to one group with each of the first 12 frames (a group's names outgrowing the room
@@ -19,7 +19,7 @@ import subprocess
 import harness
 
 PARTICLES = 100
-FRAMES = 70
+FRAMES = {False: 24, True: 70}  # by recording: the Recorder's, the deep indexes
 
 
 def write(path, deep, kill_at=None):
@@ -27,7 +27,7 @@ def write(path, deep, kill_at=None):
     if kill_at:
         env["SPHFSI_KILL_AT_WRITE"] = str(kill_at)
     mode = ["--deep-index"] if deep else []
-    return subprocess.run([os.path.join(harness.BIN, "record_writer"), *mode, path, str(PARTICLES), str(FRAMES)],
+    return subprocess.run([os.path.join(harness.BIN, "record_writer"), *mode, path, str(PARTICLES), str(FRAMES[deep])],
                           capture_output=True, text=True, env=env, timeout=60)
 
 
@@ -71,7 +71,7 @@ def kill_at_every_write(name, deep):
     assert whole.returncode == 0, whole.stderr
     writes = int(whole.stderr.split("writes: ")[1])
     with harness.record(path) as f:
-        assert len(f["frames/fluid/time"]) == FRAMES
+        assert len(f["frames/fluid/time"]) == FRAMES[deep]
     first_record, kept = None, 0
     for k in range(1, writes + 1):
         for stale in (path, path + ".creating"):
@@ -89,7 +89,7 @@ def kill_at_every_write(name, deep):
             raise AssertionError(f"killed before write {k} of {writes}: {e!r}") from e
         assert frames >= kept - 1, (k, frames, kept)  # at most the frame being flushed is lost
         kept = max(kept, frames)
-    assert first_record is not None and first_record < writes / FRAMES, first_record
+    assert first_record is not None and first_record < writes / FRAMES[deep], first_record
     print(f"{name}: {writes} writes; a kill before any of writes 1 - {first_record - 1} left no record, before any "
           f"of {first_record} - {writes} a record that reads back whole")
 
