@@ -23,11 +23,13 @@ _test_dirs = []    # the output folders of the test now running: removed if it p
 _shared_dirs = []  # folders several tests read: removed when the whole file passes
 
 
-def sphfsi(*args, timeout=60, env=None, check=None):
-    """Runs the coordinator to completion; returns (exit code, stderr text)."""
+def sphfsi(*args, timeout=60, env=None, check=None, preexec_fn=None):
+    """Runs the coordinator to completion; returns (exit code, stderr text). `preexec_fn` runs in the child
+    before the coordinator starts (resource limits)."""
     e = dict(os.environ)
     e.update(env or {})
-    p = subprocess.run([os.path.join(BIN, "sphfsi"), *args], capture_output=True, text=True, timeout=timeout, env=e)
+    p = subprocess.run([os.path.join(BIN, "sphfsi"), *args], capture_output=True, text=True, timeout=timeout, env=e,
+                       preexec_fn=preexec_fn)
     if check is not None and p.returncode != check:
         raise AssertionError(f"sphfsi {' '.join(args)} exited {p.returncode}, expected {check}:\n{p.stderr}")
     return p.returncode, p.stdout + p.stderr

@@ -261,7 +261,6 @@ def test_a_record_that_cannot_grow_stops_the_run_and_reads_back():
     # A full disk, as a file-size limit (RLIMIT_FSIZE, SIGXFSZ ignored, so writes past it fail with EFBIG):
     # the dam break's frames are ~0.4 MB, so a 2 MB record fills within a few frames.
     import resource
-    import subprocess
 
     def limited():
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
@@ -269,10 +268,10 @@ def test_a_record_that_cannot_grow_stops_the_run_and_reads_back():
 
     out = harness.out_dir("full")
     scene = os.path.join(harness.ROOT, "scenarios", "dam_break.toml")
-    p = subprocess.run([os.path.join(harness.BIN, "sphfsi"), "run", scene, "--out", out, "--quiet", "--set",
-                        "run.end_time=0.3"], capture_output=True, text=True, timeout=120, preexec_fn=limited)
-    assert p.returncode == 1, (p.returncode, p.stderr)
-    assert "cannot write the record to its file (cannot write: File too large)" in p.stderr, p.stderr
+    code, text = harness.sphfsi("run", scene, "--out", out, "--quiet", "--set", "run.end_time=0.3", timeout=120,
+                                preexec_fn=limited)
+    assert code == 1, (code, text)
+    assert "cannot write the record to its file (cannot write: File too large)" in text, text
     with harness.record(os.path.join(out, "record.h5")) as f:
         assert 1 <= len(f["frames/fluid/time"]) < 6
         read = []
