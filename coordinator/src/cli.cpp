@@ -5,6 +5,7 @@
 #include "sphfsi/coordinator/git_revision.hpp"
 #include "sphfsi/coordinator/run.hpp"
 #include "sphfsi/coordinator/scene.hpp"
+#include "sphfsi/coordinator/scene_warnings.hpp"
 #include "sphfsi/coordinator/version.hpp"
 #include "sphfsi/protocol/message.hpp"
 
@@ -88,6 +89,7 @@ int main_cli(int argc, char** argv) {
             Scene s = load_scene(scene, opt.overrides);
             std::string roles = std::string(s.has("structure") ? "structure " : "") + (s.has("fluid") ? "fluid" : "");
             std::cout << scene << ": valid; participants: " << roles << "\n";
+            for (const std::string& w : scene_warnings(s)) std::cerr << "sphfsi: warning: " << w << "\n";
             return 0;
         } catch (const ConfigError& e) {
             std::cerr << "sphfsi: invalid scene:\n" << e.what() << "\n";

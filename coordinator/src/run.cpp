@@ -23,6 +23,7 @@
 #include "sphfsi/coordinator/progress.hpp"
 #include "sphfsi/coordinator/recorder.hpp"
 #include "sphfsi/coordinator/scene.hpp"
+#include "sphfsi/coordinator/scene_warnings.hpp"
 #include "sphfsi/coordinator/version.hpp"
 #include "sphfsi/coordinator/watchpoints.hpp"
 
@@ -161,6 +162,7 @@ int Runner::execute() {
     end_ = run.at("end_time").as_double();
     output_dt_ = run.number_or("output_interval", end_ / 100);
     checkpoint_dt_ = run.number_or("checkpoint_interval", 10 * output_dt_);
+    for (const std::string& w : scene_warnings(scene_)) log("warning: " + w);
 
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
@@ -287,14 +289,6 @@ void Runner::initialise(std::optional<Checkpoint>& resume) {
         energy_limits_.max_created = c.at("max_created_energy").as_double();
         energy_limits_.max_gain = c.at("max_energy_gain").as_double();
         energy_limits_.external_work = fluid_does_external_work();
-        // A warning, not an error: heavier structures are fine with any integrator (docs/validation.md). About
-        // the built-in structure only: a foreign one's [structure] keys are its own.
-        const Value* integrator = find_path(scene_.tree, "structure.time.integrator");
-        if (schedule_->one_structure_step() && !scene_.custom_program("structure") &&
-            (!integrator || !integrator->is_string() || integrator->as_string() != "backward_euler"))
-            log("warning: coupling.structure_steps = \"window\" is meant with structure.time.integrator = "
-                "\"backward_euler\", whose step acceleration is the window's mean; one generalized-alpha step per "
-                "window failed from mass ratio 0.001 on the added-mass plate (docs/coupling.md)");
     }
     if (resume) {
         InterfaceState saved = resume->interface;

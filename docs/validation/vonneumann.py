@@ -8,6 +8,9 @@ with G_p from the pressure-gradient kernel and G_rho from the density kernel (su
 density kernel; continuity: the gradient kernel). Symplectic Euler with drho from v^{n+1} and velocity
 Verlet are leapfrog-type: stable iff omega dt <= 2, so the acoustic CFL number lambda = c dt / h must
 satisfy lambda <= 2 / (h V max_k sqrt(G_p . G_rho)). Kernels as in fluid/include/sphfsi/fluid/kernels.hpp.
+Where G_p . G_rho < 0 for some k (two different kernels: the thesis's poly6 densities with spiky pressure
+gradients), omega^2 < 0: that mode grows at rest at the rate gamma = c V sqrt(-G_p . G_rho) whatever the
+step, by exp(gamma dt) = exp(lambda h gamma / c) a step; printed as h gamma_max / c.
 usage: /usr/bin/python3 docs/validation/vonneumann.py
 """
 import numpy as np
@@ -52,14 +55,17 @@ def bound(h_over_dp, k_p, k_rho, n=181):
     rx, ry, r = rx[keep], ry[keep], r[keep]
     fp, fr = grad_factor(k_p, r, h), grad_factor(k_rho, r, h)
     ks = np.linspace(-PI / dp, PI / dp, n)
-    best = 0.0
+    best, worst = 0.0, 0.0
     for kx in ks:
         s = np.sin(kx * rx[None, :] + ks[:, None] * ry[None, :])
         Gp = np.stack([s @ (fp * rx), s @ (fp * ry)], -1) * dp * dp
         Gr = np.stack([s @ (fr * rx), s @ (fr * ry)], -1) * dp * dp
-        best = max(best, float(np.max(np.sum(Gp * Gr, -1))))
+        product = np.sum(Gp * Gr, -1)
+        best = max(best, float(np.max(product)))
+        worst = min(worst, float(np.min(product)))
     hw = h * np.sqrt(best)          # h omega_max / c
-    return 2.0 / hw, hw
+    hg = h * np.sqrt(max(0.0, -worst))  # h gamma_max / c: growth at rest (0: none)
+    return 2.0 / hw, hw, hg
 
 
 if __name__ == "__main__":
@@ -68,5 +74,9 @@ if __name__ == "__main__":
              ("mueller, continuity (spiky gradients)", "spiky", "spiky")]
     for hd in (1.5,):
         for name, kp, kr in cases:
-            lam, hw = bound(hd, kp, kr)
-            print(f"h = {hd} dp, {name}: h omega_max / c = {hw:.3f} -> leapfrog-type schemes stable for cfl <= {lam:.2f}")
+            lam, hw, hg = bound(hd, kp, kr)
+            grows = f"; modes grow at rest, h gamma_max / c = {hg:.3f}" if hg > 1e-6 else ""
+            print(f"h = {hd} dp, {name}: h omega_max / c = {hw:.3f} -> leapfrog-type schemes stable for cfl <= {lam:.2f}{grows}")
+    for hd in (1.0, 1.1, 1.2, 1.3, 1.5, 1.7, 2.0):
+        lam, hw, hg = bound(hd, "spiky", "poly6")
+        print(f"mueller, summation, h = {hd} dp: h gamma_max / c = {hg:.3f} ({hg / hw:.3f} of h omega_max / c)")
