@@ -305,8 +305,8 @@ TableSchema build() {
                     "particles); \"adami\": pressure extrapolated from the fluid (Adami, Hu & Adams 2012)")
         .fallback("adami");
     boundary.choice("slip", {"no_slip", "free_slip"},
-                    "\"no_slip\": viscous terms see the wall's extrapolated ghost velocity (Adami); \"free_slip\": "
-                    "no viscous interaction with walls")
+                    "\"no_slip\": viscous terms see the wall's or solid's extrapolated ghost velocity (Adami); \"free_slip\": "
+                    "no viscous interaction with walls or solids, on either side of a pair")
         .fallback("no_slip");
     boundary.boolean("repulsive", "add Monaghan's (1994) repulsive wall force within dp of a wall particle: the "
                                   "non-penetration guard for spray, which carries no pressure for the Adami walls to push "

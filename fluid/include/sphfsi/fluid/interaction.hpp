@@ -138,7 +138,7 @@ void compute_rates(ParticleStore<Dim>& P, const CellGrid<Dim>& grid, const Kerne
                         acc += pair_corrected(prm.correction[i], prm.correction[j], dx) * (-(pr2_i + fj.pr2) * F);
                     else
                         coef = -(pr2_i + fj.pr2);
-                    const bool viscous = fluid_j || prm.viscous_walls;
+                    const bool viscous = (is_fluid && fluid_j) || prm.viscous_walls;  // both sides of a pair alike
                     if (vmodel != ViscosityModel::None && viscous) {
                         const V vij = vi_visc - (fluid_j ? v[j] : vv[j]);
                         if (vmodel == ViscosityModel::Artificial) {
