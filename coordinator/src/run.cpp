@@ -388,7 +388,8 @@ void Runner::loop() {
         steps_ += fluid_ ? o.fluid.reply.substeps : o.structure.reply.substeps;
         InterfaceWork work;
         if (coupled_)
-            work = interface_work(iface_.force, structure_start, iface_.displacement, fluid_start, iface_.fluid_displacement);
+            work = interface_work(o.structure_force, iface_.force, structure_start, iface_.displacement, fluid_start,
+                                  iface_.fluid_displacement);
         record_window(plan, o, wall, work);
         // After the window is recorded, so a run stopped by the energy checks keeps the window that tripped them.
         if (coupled_) account_energy(energy_limits_, windows_, t_, o, work, iface_);

@@ -43,6 +43,7 @@ public:
         s.force = vertex_field("fluid", o.fluid.reply.outputs, "force", s.vertices());
         s.fluid_displacement = d;
         o.structure = session_.advance("structure", p.t, p.dt, p.structure_substeps, 0, Fields{{"force", s.force}});
+        o.structure_force = s.force;
         accept_structure(s, o.structure, p.dt);
         return o;
     }
@@ -65,6 +66,7 @@ public:
         WindowOutcome o;
         o.fluid = session_.finish_advance("fluid", fseq);
         o.structure = session_.finish_advance("structure", sseq);
+        o.structure_force = s.force;  // the window-start force it was sent
         s.force = vertex_field("fluid", o.fluid.reply.outputs, "force", s.vertices());
         s.fluid_displacement = d;
         accept_structure(s, o.structure, p.dt);

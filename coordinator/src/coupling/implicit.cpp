@@ -206,6 +206,7 @@ public:
             o.converged = o.residual <= bound;
             if (o.converged || k + 1 >= max_iter_) {
                 s.force = f;
+                o.structure_force = f;
                 s.fluid_displacement = to_array(x.head(nd), d);
                 s.previous_displacement = s.displacement;
                 s.previous_dt = p.dt;

@@ -37,6 +37,9 @@ private:
 
 struct WindowOutcome {
     StepResult fluid, structure;
+    // The interface force the structure was advanced with: the fluid's force of this window, or for
+    // parallel-explicit of the last one (the interface energy balance needs it).
+    protocol::F64Array structure_force;
     std::uint32_t iterations = 1;  // coupling iterations (1 for explicit schemes)
     double residual = 0.0;         // final interface displacement residual norm [m] (0 for explicit)
     bool converged = true;
