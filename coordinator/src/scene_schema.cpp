@@ -67,11 +67,14 @@ void coupling_section(schema::TableSchema& s) {
              "under implicit coupling, with structure.time.integrator = \"backward_euler\" (docs/coupling.md).")
         .fallback("resolve");
     c.integer("max_fluid_steps", "multi-rate: most fluid steps one window may span.").at_least(1).at_most(100000).fallback(10);
-    c.choice("predictor", {"none", "linear", "quadratic"}, "Interface displacement predictor for explicit schemes.")
+    c.choice("predictor", {"none", "linear", "quadratic"},
+             "Interface displacement predicted for the window's end: what explicit schemes give the fluid, and implicit "
+             "schemes' first iterate (docs/coupling.md).")
         .fallback("linear");
-    c.number("tolerance_rel", "Implicit: converged when |residual| <= tolerance_rel |displacement| + tolerance_abs.")
+    c.number("tolerance_rel", "Implicit: converged when |residual| <= tolerance_rel |displacement| + tolerance_abs "
+                              "sqrt(vertices) (2-norms over all vertices).")
         .greater_than(0).at_most(1).fallback(1e-3);
-    c.number("tolerance_abs", "Implicit: absolute part of the convergence test.").unit("m").at_least(0).at_most(1).fallback(1e-9);
+    c.number("tolerance_abs", "Implicit: absolute part of the convergence test, an RMS length per vertex.").unit("m").at_least(0).at_most(1).fallback(1e-9);
     c.integer("max_iterations", "Implicit: iteration cap per window.").at_least(1).at_most(1000).fallback(30);
     c.choice("on_max_iterations", {"warn", "error"}, "Implicit: what hitting the cap does.").fallback("warn");
     c.number("relaxation", "Implicit: initial (fixed-point: constant) under-relaxation factor.").greater_than(0).at_most(1).fallback(0.5);

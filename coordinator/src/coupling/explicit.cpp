@@ -13,10 +13,16 @@ void predict(const std::string& kind, const InterfaceState& s, double dt, F64Arr
         for (std::size_t i = 0; i < d.values.size(); ++i) d.values[i] += dt * s.velocity.values[i];
         return;
     }
-    // Second order (Piperno 1997): d + dt (3/2 v_n - 1/2 v_{n-1}), v_{n-1} from the last two displacements.
+    // Second order: d_n + dt v_n + dt^2 / 2 a, which for equal windows is Piperno's (1997)
+    // d_n + dt (3/2 v_n - 1/2 v_{n-1}). The acceleration comes from the last window's mean velocity
+    // vbar = (d_n - d_{n-1}) / dt_prev, the velocity at that window's middle under a constant acceleration:
+    // a = (v_n - vbar) / (dt_prev / 2). Exact for a constant acceleration whatever the two windows' lengths.
+    // (Until 2026-11-27 vbar stood in for v_{n-1} in Piperno's form: a dt^2 / 4 off under a constant
+    // acceleration, first order like the linear predictor.)
     for (std::size_t i = 0; i < d.values.size(); ++i) {
-        double v_prev = (s.displacement.values[i] - s.previous_displacement.values[i]) / s.previous_dt;
-        d.values[i] += dt * (1.5 * s.velocity.values[i] - 0.5 * v_prev);
+        const double v_mean = (s.displacement.values[i] - s.previous_displacement.values[i]) / s.previous_dt;
+        const double a = (s.velocity.values[i] - v_mean) / (0.5 * s.previous_dt);
+        d.values[i] += dt * s.velocity.values[i] + 0.5 * dt * dt * a;
     }
 }
 
