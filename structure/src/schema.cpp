@@ -200,7 +200,9 @@ TableSchema build() {
              "\"corotational\": large rotations (Crisfield/Battini), Newton iterations per step")
         .fallback("linear");
     s.choice("mass", {"consistent", "lumped"},
-             "mass matrix: consistent (Hermitian cubic) or lumped (rho A L/2 per node, rotary rho A L^3/78, HRZ)")
+             "mass matrix: consistent (Hermitian cubic) or lumped (rho A L/2 per node, rotary rho A L^3/78, HRZ); "
+             "corotational runs keep each element's consistent matrix in its reference orientation (lumped is the "
+             "same in every orientation)")
         .fallback("consistent");
     s.boolean("gravity", "apply self-weight rho A g as a distributed load on every member").fallback(false);
     s.vector("gravity_vector", 2, "gravitational acceleration used when gravity = true").unit("m/s^2")
