@@ -133,6 +133,11 @@ void Recorder::copy_history(const std::filesystem::path& old_file, double until)
     hsize_t windows = rows_in_all("/windows", rows_until("/windows/t"), {});
     if (h5::exists(src.get(), "/interface")) windows = rows_in_all("/interface", windows, {"vertices", "cells"});
     for (const auto& name : h5::children(src.get(), "/windows")) copy_rows("/windows/" + name, windows, 4096);
+    // The columns stay those the interrupted run chose at its first window (append_window): chosen again from
+    // the first window after the resume, a name that had appeared late would start a column of its own,
+    // rows short, and the next resume would cut every column to it.
+    window_columns_ = h5::children(src.get(), "/windows");
+    window_buffer_.assign(window_columns_.size(), {});
     for (const auto& name : h5::children(src.get(), "/interface")) {
         const std::string path = "/interface/" + name;
         bool mesh = name == "vertices" || name == "cells";
@@ -152,6 +157,19 @@ void Recorder::copy_history(const std::filesystem::path& old_file, double until)
         if (series_.count(group + "position")) write_xdmf(role);  // the sidecar may list frames dropped here
     }
     flush();
+}
+
+double Recorder::window_column_sum(const std::string& name) {
+    double sum = 0.0;
+    if (const h5::Series* s = existing_series("/windows/" + name)) {
+        std::vector<double> rows(s->rows());
+        s->read(rows.data(), s->rows());
+        for (double v : rows) sum += v;
+    }
+    const auto column = std::find(window_columns_.begin(), window_columns_.end(), name);
+    if (column != window_columns_.end())
+        for (double v : window_buffer_[static_cast<std::size_t>(column - window_columns_.begin())]) sum += v;
+    return sum;
 }
 
 Recorder::~Recorder() {
@@ -187,8 +205,10 @@ void Recorder::set_participant(const std::string& role, const std::string& softw
 void Recorder::set_interface(const protocol::InterfaceMesh& mesh) {
     interface_vertices_ = mesh.vertices.rows();
     if (h5::exists(h5_.get(), "/interface/vertices")) return;
-    series("/interface/vertices", {2}, false, mesh.vertices.rows()).append(mesh.vertices.values.data(), mesh.vertices.rows());
-    series("/interface/cells", {4}, true, mesh.cells.rows()).append(mesh.cells.values.data(), mesh.cells.rows());
+    // One chunk holds the whole mesh; HDF5 cannot chunk by 0 rows (a structure alone with no wetted member).
+    const hsize_t vertices = std::max<hsize_t>(mesh.vertices.rows(), 1), cells = std::max<hsize_t>(mesh.cells.rows(), 1);
+    series("/interface/vertices", {2}, false, vertices).append(mesh.vertices.values.data(), mesh.vertices.rows());
+    series("/interface/cells", {4}, true, cells).append(mesh.cells.values.data(), mesh.cells.rows());
 }
 
 std::vector<std::string> Recorder::append_window(const std::vector<std::pair<std::string, double>>& columns,
@@ -308,6 +328,7 @@ void Recorder::write_xdmf(const std::string& role) {
           << field << "</DataItem>\n</DataItem>\n";
     };
     std::ostringstream x;
+    x.precision(17);  // frame times to the last bit: 6 digits merged frames 1 us apart late in a run
     x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n<Domain>\n<Grid Name=\"" << role
       << "\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
     const auto& times = frame_times_[role];

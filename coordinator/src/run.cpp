@@ -149,8 +149,8 @@ int Runner::execute() {
         return 2;
     }
     if (!resume)  // a fresh run: what an earlier run left here must not be resumed or read as this run's
-        for (const char* stale : {"checkpoint.bin", "record.xdmf", "watchpoints.csv", "record.h5.resuming",
-                                  "record.h5.creating"})
+        for (const char* stale : {"checkpoint.bin", "record.xdmf", "watchpoints.csv", "watchpoints.csv.resuming",
+                                  "record.h5.resuming", "record.h5.creating"})
             std::filesystem::remove(opt_.out_dir / stale);
     log_file_.open(opt_.out_dir / "run.log", resume ? std::ios::app : std::ios::trunc);
     const Value& run = scene_.section("run");
@@ -172,6 +172,10 @@ int Runner::execute() {
     for (const auto& o : scene_.overrides) meta.overrides += (meta.overrides.empty() ? "" : " ") + o;
     recorder_ = std::make_unique<Recorder>(opt_.out_dir / "record.h5", meta,
                                            resume ? std::optional<double>(resume->t) : std::nullopt);
+    if (resume) {  // the totals cover every window of the record, those before the interruption too
+        wall_in_loop_s_ = recorder_->window_column_sum("wall_s");
+        messaging_total_s_ = recorder_->window_column_sum("messaging_s");
+    }
     std::string status = "completed";
     int code = 0;
     try {

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <iterator>
+#include <stdexcept>
 #include <sstream>
 
 namespace sphfsi::coordinator {
@@ -30,16 +33,38 @@ Watchpoints::Watchpoints(const std::filesystem::path& file, const Value& scene, 
         }
     }
     if (points_.empty()) return;
-    std::string kept;
-    if (append && std::filesystem::exists(file)) {  // keep the rows up to the checkpoint
-        std::ifstream in(file);
-        std::string line;
-        std::getline(in, line);
-        while (std::getline(in, line))
-            if (std::stod(line.substr(0, line.find(','))) <= resume_t * (1 + 1e-12)) kept += line + "\n";
+    const char* header = "time,name,x,y,dx,dy\n";
+    if (!append || !std::filesystem::exists(file)) {
+        out_.open(file, std::ios::trunc);
+        out_ << header;
+        return;
     }
-    out_.open(file, std::ios::trunc);
-    out_ << "time,name,x,y,dx,dy\n" << kept;
+    // A resume keeps the rows up to the checkpoint: whole rows only (a kill can cut the last one short), in
+    // time order up to the first one beyond it. They go to a new file that replaces the old one once it is
+    // on disk, so a resume stopped before its first frame still leaves them (as the record keeps its frames).
+    std::ifstream in(file);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::string kept = header;
+    std::size_t at = text.find('\n');
+    for (std::size_t end; at != std::string::npos && (end = text.find('\n', at + 1)) != std::string::npos; at = end) {
+        const std::string line = text.substr(at + 1, end - at - 1);
+        char* stop = nullptr;
+        const double t = std::strtod(line.c_str(), &stop);
+        if (std::count(line.begin(), line.end(), ',') != 5 || stop == line.c_str() || *stop != ',' ||
+            !(t <= resume_t * (1 + 1e-12)))
+            break;
+        kept += line + "\n";
+    }
+    auto fresh = file;
+    fresh += ".resuming";
+    {
+        std::ofstream f(fresh, std::ios::trunc);
+        f << kept;
+        f.flush();
+        if (!f) throw std::runtime_error("cannot write " + fresh.string());
+    }
+    std::filesystem::rename(fresh, file);
+    out_.open(file, std::ios::app);
 }
 
 void Watchpoints::write(double t, const protocol::F64Array& displacement) {

@@ -47,7 +47,18 @@ def test_resumed_run_matches_uninterrupted_run():
     full = harness.out_dir("resume-full")
     harness.sphfsi("run", SCENE, "--out", full, "--quiet", *SETTINGS, check=0, timeout=120)
 
-    cut = killed_after_first_checkpoint(SCENE, SETTINGS, "resume-cut")
+    cut = kill_after_first_checkpoint(SCENE, SETTINGS, "resume-cut")
+    # A kill can cut watchpoints.csv's last row short; "0." reads as a time before the checkpoint, and a
+    # resume once kept it as a row of its own.
+    csv_path = os.path.join(cut, "watchpoints.csv")
+    with open(csv_path) as f:
+        text = f.read()
+    with open(csv_path, "w") as f:
+        f.write(text + "0.")
+    code, text = harness.sphfsi("run", "--resume", cut, "--quiet", timeout=240)
+    assert code == 0 and "resumed at t = " in text, text
+    with open(os.path.join(full, "watchpoints.csv")) as a, open(csv_path) as b:
+        assert a.read() == b.read(), "the resumed run's watchpoints differ from the uninterrupted run's"
 
     t_a, d_a, v_a, w_a = final_state(full)
     t_b, d_b, v_b, w_b = final_state(cut)
@@ -132,6 +143,26 @@ def test_a_resume_stopped_at_any_moment_keeps_the_history():
     t, x = fluid_history(cut, 1.0)
     assert np.array_equal(t[:times.size], times) and np.array_equal(x[:times.size], positions)
     assert t.size == 401 and np.all(np.diff(t) > 0) and abs(t[-1] - 0.2) < 1e-9, (t.size, t[-3:])
+
+
+def test_a_resume_keeps_the_window_columns_of_the_interrupted_run():
+    """The window columns are those of a run's first window (a stats name first sent later is named and not
+    recorded, test_lifecycle.py), and the root totals sum them. A resume keeps both: it once chose them again from its own first window, so
+    the misbehaving participant's "late" stat, sent from t > 0, became a column holding only the resumed
+    windows, shorter than the others, and the next resume cut the whole table to its length."""
+    scene = os.path.join(harness.SCENES, "misbehaving.toml")
+    settings = ["--set", 'structure.mode="stats_late"', "--set", "run.end_time=200.0",
+                "--set", "run.checkpoint_interval=0.5", "--set", "run.output_interval=0.5"]
+    cut = killed_after_first_checkpoint(scene, settings, "resume-columns")
+    with harness.record(os.path.join(cut, "record.h5")) as f:
+        rows = {name: f["windows"][name].shape[0] for name in f["windows"]}
+        print(f"after the resume: {len(rows)} window columns, rows {sorted(set(rows.values()))}")
+        assert "structure.late" not in rows, sorted(rows)
+        assert set(rows.values()) == {400}, rows  # a structure alone: a window per frame, 200 s / 0.5 s
+        # The root totals are the columns' sums over the whole record (they once counted the resumed windows only).
+        for total, column in (("wall_s", "wall_s"), ("messaging_and_waiting_s", "messaging_s")):
+            summed = f["windows"][column][:].sum()
+            assert abs(f.attrs[total] - summed) <= 1e-9 * max(summed, 1e-300), (total, f.attrs[total], summed)
 
 
 def test_a_fresh_run_leaves_nothing_of_an_earlier_run_to_resume():

@@ -99,5 +99,23 @@ def test_check_validates_without_running():
     assert code == 0 and "valid" in text, text
 
 
+def test_a_structure_with_nothing_wetted_runs_alone():
+    """A structure alone may publish no interface (no wetted member): the run records an empty mesh and no
+    interface rows. Before 2026-11-27 HDF5 refused to chunk the empty mesh and the run failed at its start
+    ("cannot create dataset /interface/vertices"). A watchpoint needs a wetted surface and says so."""
+    scene = os.path.join(harness.ROOT, "scenarios", "beam_only.toml")
+    dry = ["--set", "structure.members[0].wetted=false", "--set", "run.end_time=0.1"]
+    out = harness.out_dir("nothing-wetted")
+    code, text = harness.sphfsi("run", scene, "--out", out, "--quiet", *dry, "--set", "watchpoint=[]", timeout=60)
+    assert code == 0, text
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert f.attrs["status"] == "completed"
+        assert f["interface/vertices"].shape == (0, 2) and f["interface/cells"].shape == (0, 4)
+        assert f["windows/t"].shape[0] == 10 and f["frames/structure/displacement"].shape[0] == 11
+    code, text = harness.sphfsi("run", scene, "--out", harness.out_dir("nothing-wetted-watched"), "--quiet", *dry,
+                                timeout=60)
+    assert code != 0 and "watchpoint 'tip': the structure publishes no interface cells" in text, text
+
+
 if __name__ == "__main__":
     harness.main(globals())

@@ -68,6 +68,7 @@ public:
     void flush();                                // writes buffered windows and flushes the file
 
     std::size_t frames(const std::string& role) const;
+    double window_column_sum(const std::string& name);  // over every window recorded so far (0: no such column)
     const std::filesystem::path& file() const { return file_; }
 
 private:
