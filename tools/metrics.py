@@ -408,10 +408,12 @@ def max_density_error(run_dir, params, context):
 
 
 def read_reference_curve(path):
-    """Two numeric columns after '#' comment lines and a header line (e.g. T,Z)."""
+    """Two numeric columns after '#' comment lines and an optional header line (e.g. T,Z), in increasing
+    order of the first; any other line that is not two numbers is an error, not skipped."""
     xs, ys = [], []
+    number_of_header = None
     with open(path) as f:
-        for line in f:
+        for number, line in enumerate(f, 1):
             s = line.strip()
             if not s or s.startswith("#"):
                 continue
@@ -419,11 +421,16 @@ def read_reference_curve(path):
             try:
                 x, y = float(parts[0]), float(parts[1])
             except (ValueError, IndexError):
-                continue  # the header
+                if xs or number_of_header is not None:
+                    raise MetricError(f"{path}:{number}: not two comma-separated numbers: {s!r}")
+                number_of_header = number
+                continue
             xs.append(x)
             ys.append(y)
     if not xs:
         raise MetricError(f"{path}: no data rows")
+    if any(b <= a for a, b in zip(xs, xs[1:])):
+        raise MetricError(f"{path}: the first column must increase from row to row")
     return np.array(xs), np.array(ys)
 
 
@@ -439,12 +446,15 @@ def reference_points(params, context, time_name):
 
 def relative_errors(x_ref, y_ref, x, y, time_name):
     """(y - y_ref) / y_ref at each reference point, the measured curve y(x) interpolated linearly over its
-    finite points; the curve must reach the last of them (never extrapolated)."""
+    finite points; the curve must cover the first and the last of them (never extrapolated)."""
     ok = np.isfinite(y)
     x, y = x[ok], y[ok]
     if x.size < 2 or x[-1] < x_ref[-1] - 1e-9:
         raise MetricError(f"the frames reach {time_name} = {x[-1] if x.size else 0:.3g}, not the last reference "
                           f"point {time_name} = {x_ref[-1]:.3g}")
+    if x[0] > x_ref[0] + 1e-9:
+        raise MetricError(f"the frames with a value start at {time_name} = {x[0]:.3g}, after the first reference "
+                          f"point {time_name} = {x_ref[0]:.3g}")
     return (np.interp(x_ref, x, y) - y_ref) / y_ref
 
 

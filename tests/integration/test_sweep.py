@@ -498,10 +498,12 @@ def test_guard_passes_and_catches_regressions():
         body = f.read().replace('scene = "../scenarios/beam_only.toml"', f'scene = "{BEAM}"')
 
     def guarded(recorded, name):
+        value = recorded if not isinstance(recorded, dict) else \
+            "{ " + ", ".join(f"{k} = {specs.toml_value(v)}" for k, v in recorded.items()) + " }"
         path = write(os.path.join(d, name + ".toml"), body + f'''
 [[expect]]
 where = {{ case = "newmark_dt1e-3" }}
-"tip.l2_rel" = {recorded!r}
+"tip.l2_rel" = {value}
 ''')
         return sweep(path, "--out", out, "--check", "--resume", "--no-charts")
 
@@ -512,6 +514,13 @@ where = {{ case = "newmark_dt1e-3" }}
     rc, text = guarded(measured / 1.25, "tight")
     assert rc == 1, text
     assert re.search(r"check: FAIL newmark_dt1e-3: tip\.l2_rel = \S+, recorded \S+: \+25\.0 %", text), text
+    # A fall passes as an improvement, unless the quantity is two-sided: then more than 20 % either way fails.
+    rc, text = guarded(measured * 1.25, "fallen")
+    assert rc == 0 and "improved on the recorded" in text, text
+    rc, text = guarded({"value": measured * 1.3, "two_sided": True}, "fallen_two_sided")  # 23 % below
+    assert rc == 1 and "moved by more than 0.2 of it" in text, text
+    rc, text = guarded({"value": measured * 1.15, "two_sided": True}, "within_two_sided")
+    assert rc == 0, text
     # A run expected to complete that does not.
     path = write(os.path.join(d, "starved.toml"), body + '''
 [[case]]

@@ -6,7 +6,9 @@ selects it. A check fails when
   * a recorded quantity has no value now, or
   * |measured| > |recorded| * (1 + tolerance) + atol   (defaults: [check] tolerance = 0.2, atol = 0),
 so an error may not rise more than 20 % above its recorded value. A value that fell below
-|recorded| / (1 + tolerance) passes, with a note to record the improvement.
+|recorded| / (1 + tolerance) passes, with a note to record the improvement. A quantity that is not an
+error (a signed error, a fraction of windows that converged) sets `two_sided = true`: it fails when
+|measured - recorded| > tolerance * |recorded| + atol, whichever way it moved.
 """
 import math
 
@@ -37,6 +39,11 @@ def check(runs, rows_by_id, defaults):
             measured = row.get(key)
             if measured is None or (isinstance(measured, float) and math.isnan(measured)):
                 failures.append(f"{who}: {key} has no value (recorded {recorded:.4g})")
+                continue
+            if e.get("two_sided", False):
+                if abs(measured - recorded) > tol * abs(recorded) + atol:
+                    failures.append(f"{who}: {key} = {measured:.4g}, recorded {recorded:.4g}: moved by more than "
+                                    f"{tol:g} of it + {atol:g} (two-sided)")
                 continue
             limit = abs(recorded) * (1 + tol) + atol
             if abs(measured) > limit:

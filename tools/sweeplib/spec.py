@@ -375,11 +375,14 @@ def _check_expect(e, what, fail):
                 fail(f"{what} status: expected a string such as \"completed\"")
             out[k] = v
         elif isinstance(v, dict):
-            extra = set(v) - {"value", "tolerance", "atol"}
+            extra = set(v) - {"value", "tolerance", "atol", "two_sided"}
             if extra or "value" not in v:
-                fail(f"{what} {k}: expected a number or {{ value = ..., tolerance = ..., atol = ... }}")
+                fail(f"{what} {k}: expected a number or {{ value = ..., tolerance = ..., atol = ..., two_sided = ... }}")
             for kk, vv in v.items():
-                if isinstance(vv, bool) or not isinstance(vv, (int, float)):
+                if kk == "two_sided":
+                    if not isinstance(vv, bool):
+                        fail(f"{what} {k}.two_sided: expected true or false")
+                elif isinstance(vv, bool) or not isinstance(vv, (int, float)):
                     fail(f"{what} {k}.{kk}: expected a number")
             out[k] = dict(v)
         elif isinstance(v, (int, float)) and not isinstance(v, bool):
