@@ -28,22 +28,29 @@ Hub::Hub(std::string bind_endpoint, std::string token, HubTiming timing, Launche
     socket_.set(zmq::sockopt::linger, 0);
     socket_.set(zmq::sockopt::router_mandatory, 1);  // sending to a vanished peer is an error, not a silent drop
     socket_.set(zmq::sockopt::maxmsgsize, static_cast<int64_t>(DecodeLimits{}.max_bytes));
+    // With router_mandatory a send to a peer whose queue is full blocks: bounded, so nothing waits for ever.
+    socket_.set(zmq::sockopt::sndtimeo, static_cast<int>(std::max(1.0, 1000.0 * timing_.timeout_s)));
     socket_.bind(bind_endpoint);
     endpoint_ = socket_.get(zmq::sockopt::last_endpoint);
     last_beat_sent_ = Clock::now();
 }
 
-void Hub::send_raw(const std::string& identity, const Message& m) {
+void Hub::send_raw(const std::string& identity, const Message& m, bool droppable) {
     auto start = Clock::now();
     std::string bytes = encode(m);
+    const auto role = identity_role_.find(identity);
+    bool taken = false;
     try {
-        socket_.send(zmq::buffer(identity), zmq::send_flags::sndmore);
-        socket_.send(zmq::buffer(bytes), zmq::send_flags::none);
+        const auto more = droppable ? zmq::send_flags::sndmore | zmq::send_flags::dontwait : zmq::send_flags::sndmore;
+        const auto last = droppable ? zmq::send_flags::dontwait : zmq::send_flags::none;
+        taken = socket_.send(zmq::buffer(identity), more) && socket_.send(zmq::buffer(bytes), last);
     } catch (const zmq::error_t& e) {
-        auto it = identity_role_.find(identity);
-        if (it != identity_role_.end()) throw ParticipantFailure(it->second, "died", "cannot be reached: " + std::string(e.what()));
+        if (role != identity_role_.end()) throw ParticipantFailure(role->second, "died", "cannot be reached: " + std::string(e.what()));
         // a stranger that went away: nothing to do
     }
+    if (!taken && !droppable && role != identity_role_.end())
+        throw ParticipantFailure(role->second, "hung", "has not taken a message for " + fmt_s(timing_.timeout_s) +
+                                                           " (it reads none: its queue is full; run.timeout_s)");
     messaging_s_ += seconds_since(start);
 }
 
@@ -101,7 +108,7 @@ void Hub::goodbye(double timeout_s) {
     auto start = Clock::now();
     while (!pending.empty() && seconds_since(start) < timeout_s) {
         try {
-            pump(20);
+            pump(20, false);  // after Ctrl-C too: the ACKs are still worth reading
         } catch (const std::exception&) {
             // a participant that exits right after its ACK, or misbehaves now, changes nothing
         }
@@ -114,15 +121,20 @@ void Hub::goodbye(double timeout_s) {
     peers_.clear();
 }
 
-void Hub::pump(int wait_ms) {
-    if (g_interrupted) throw Interrupted();
+void Hub::pump(int wait_ms, bool interruptible) {
+    if (interruptible && g_interrupted) throw Interrupted();
     zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
     try {
         zmq::poll(&item, 1, std::chrono::milliseconds(wait_ms));
     } catch (const zmq::error_t& e) {
         if (e.num() != EINTR) throw;
-        if (g_interrupted) throw Interrupted();  // a signal woke us: SIGINT/SIGTERM asks to stop
+        if (interruptible && g_interrupted) throw Interrupted();  // a signal woke us: SIGINT/SIGTERM asks to stop
     }
+    receive_all();
+    check_liveness();
+}
+
+void Hub::receive_all() {
     while (true) {
         zmq::message_t identity, payload;
         if (!socket_.recv(identity, zmq::recv_flags::dontwait)) break;
@@ -171,7 +183,6 @@ void Hub::pump(int wait_ms) {
         }
         file_reply(role, std::move(m));
     }
-    check_liveness();
 }
 
 // Every message but a HEARTBEAT must answer a request this hub sent the participant and has not had an
@@ -208,7 +219,7 @@ void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) 
         log_("refused a connection: " + why);
         Message e = make_message(MessageType::Error, seq, their_token, ErrorReply{code, why, seq});
         e.version = their_version;
-        send_raw(id, e);
+        send_raw(id, e, true);
     };
     Message m;
     try {
@@ -254,10 +265,28 @@ void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) 
     log_(h.name + " connected: " + h.software + " (pid " + std::to_string(h.pid) + ", protocol " + std::to_string(hi) + ")");
 }
 
+// A participant that reports an ERROR and exits (as a script ending in sys.exit(1) does) is reported by its
+// ERROR, which says what went wrong, not by its exit: the ERROR may reach us a moment after the exit, so the
+// socket is read for a little longer first.
+void Hub::report_exit(const std::string& role, const std::string& how) {
+    const auto until = Clock::now() + std::chrono::milliseconds(200);
+    while (Clock::now() < until) {
+        for (const auto& [seq, m] : inbox_[role])
+            if (m.type == MessageType::Error) throw reported(role, m.as<ErrorReply>());
+        zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
+        try {
+            zmq::poll(&item, 1, std::chrono::milliseconds(20));
+        } catch (const zmq::error_t& e) {
+            if (e.num() != EINTR) throw;
+        }
+        receive_all();
+    }
+    throw ParticipantFailure(role, "died", how);
+}
+
 void Hub::check_liveness() {
     if (launcher_ && !closing_)
-        if (auto exited = launcher_->poll_exited())
-            throw ParticipantFailure(exited->first, "died", exited->second);
+        if (auto exited = launcher_->poll_exited()) report_exit(exited->first, exited->second);
     for (const auto& [role, peer] : peers_) {
         double silent = seconds_since(peer.last_seen);
         if (silent > timing_.timeout_s)
@@ -285,7 +314,7 @@ void Hub::check_liveness() {
             // Their own counter (docs/protocol.md §2): request numbers stay 1, 2, 3, ... per run.
             Message m = make_message(MessageType::Heartbeat, ++beat_seq_, token_, Heartbeat{0});
             m.version = peer.version;
-            send_raw(identity_of(role), m);
+            send_raw(identity_of(role), m, true);
         }
     }
 }

@@ -55,11 +55,28 @@ void Launcher::start(const std::string& role, const std::vector<std::string>& ar
     children_[role] = pid;
 }
 
+namespace {
+// Reaps `pid` if it has exited, after killing what is left of its process group: a participant started as a
+// wrapper (a script that runs the solver as its child) leaves the solver behind when it dies or is stopped.
+// Until the exited leader is reaped its pid, and so its group id, cannot be taken by another process.
+bool reap_if_exited(pid_t pid, int& status) {
+    siginfo_t info{};
+    if (::waitid(P_PID, static_cast<id_t>(pid), &info, WEXITED | WNOHANG | WNOWAIT) != 0 || info.si_pid != pid) return false;
+    ::kill(-pid, SIGKILL);
+    return ::waitpid(pid, &status, 0) == pid;
+}
+
+// The child and its process group (the group may not exist yet if the child has not reached setpgid).
+void signal_all_of(pid_t pid, int sig) {
+    ::kill(-pid, sig);
+    ::kill(pid, sig);
+}
+}  // namespace
+
 std::optional<std::pair<std::string, std::string>> Launcher::poll_exited() {
     for (auto it = children_.begin(); it != children_.end(); ++it) {
         int status = 0;
-        pid_t r = ::waitpid(it->second, &status, WNOHANG);
-        if (r == it->second) {
+        if (reap_if_exited(it->second, status)) {
             std::string role = it->first;
             children_.erase(it);
             return std::make_pair(role, describe_exit(status));
@@ -79,7 +96,7 @@ std::vector<std::string> Launcher::stop_all(double grace_s) {
         do {
             for (auto it = children_.begin(); it != children_.end();) {
                 int status = 0;
-                if (::waitpid(it->second, &status, WNOHANG) != it->second) {
+                if (!reap_if_exited(it->second, status)) {
                     ++it;
                     continue;
                 }
@@ -95,11 +112,11 @@ std::vector<std::string> Launcher::stop_all(double grace_s) {
     char grace[32];
     std::snprintf(grace, sizeof grace, "%.1f s", grace_s);
     stopped_by = std::string("SIGTERM (it had not exited ") + grace + " after the run ended)";
-    for (auto& [role, pid] : children_) ::kill(pid, SIGTERM);
+    for (auto& [role, pid] : children_) signal_all_of(pid, SIGTERM);
     wait_all(1.0);
     for (auto& [role, pid] : children_) {
-        ::kill(pid, SIGCONT);  // a stopped (SIGSTOP) child cannot act on SIGTERM; SIGKILL works regardless
-        ::kill(pid, SIGKILL);
+        signal_all_of(pid, SIGCONT);  // a stopped (SIGSTOP) child cannot act on SIGTERM; SIGKILL works regardless
+        signal_all_of(pid, SIGKILL);
         ::waitpid(pid, nullptr, 0);
         notes.push_back(role + " was killed with SIGKILL: it ignored SIGTERM for 1 s");
     }

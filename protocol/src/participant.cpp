@@ -314,6 +314,11 @@ private:
                 reply_error(m.seq, "bad_token", "message carries a token that is not this run's");
                 continue;
             }
+            if (m.version != version_) {  // docs/protocol.md §3.1: every message after WELCOME is in the agreed one
+                reply_error(m.seq, "version_mismatch", "message is in protocol " + std::to_string(m.version) +
+                                                           "; this run agreed on " + std::to_string(version_));
+                continue;
+            }
             if (m.type == MessageType::Bye) {
                 reply(m.seq, MessageType::Ack);
                 return 0;

@@ -43,6 +43,30 @@ def test_garbage_is_named():
 
 def test_error_reply_is_reported():
     run_fault("error", "error: structure reported diverged: node 3: rotation = nan", 5)
+    # Its ERROR, not its exit, names what went wrong when it exits right after (it was once reported as died).
+    run_fault("error_exit", "error: structure reported diverged: node 3: rotation = nan", 5)
+
+
+def test_a_wrapped_participant_stops_with_its_wrapper():
+    """A participant started through a wrapper script that runs the solver as its child (no exec): when the
+    run stops it, the solver goes too, not only the wrapper. Before 2026-11-27 only the wrapper was signalled,
+    and a hung solver outlived the run."""
+    out = harness.out_dir("wrapped")
+    code, text = harness.sphfsi("run", BAD, "--out", out, "--quiet", "--set", 'structure.mode="silent"', "--set",
+                                'participants.structure="/bin/sh ../../participants/wrapped.sh"', timeout=30)
+    assert code == 1 and "structure has been silent" in text, (code, text)
+    pid = harness.participant_pid(next(line for line in text.splitlines() if "structure connected" in line))
+
+    def running():
+        try:
+            with open(f"/proc/{pid}/stat") as f:
+                return f.read().rsplit(")", 1)[1].split()[0] != "Z"  # a zombie has exited
+        except FileNotFoundError:
+            return False
+    deadline = time.time() + 5
+    while running() and time.time() < deadline:
+        time.sleep(0.05)
+    assert not running(), f"the wrapped solver (pid {pid}) outlived the run"
 
 
 # After a failure the coordinator waits up to 1 s for BYE to be acknowledged, gives the participants 0.5 s to

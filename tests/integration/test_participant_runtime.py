@@ -207,6 +207,9 @@ def test_runtime_answers_as_the_protocol_document_says():
         # A window length that is not > 0, or a start that is not finite, is out of range: bad_message.
         expect_error(c.request("ADVANCE", 10, advance(0.0, 0.0, n)), 10, "bad_message")
         expect_error(c.request("ADVANCE", 10, advance(float("nan"), 1e-3, n)), 10, "bad_message")
+        # From WELCOME on every message is in the agreed version (1 here): one in another is version_mismatch.
+        c.send_raw({"v": 2, "type": "SAVE", "seq": 10, "token": TOKEN, "body": {}})
+        expect_error(c.receive(), 10, "version_mismatch")
         # And the participant is still well: it advances, then leaves on BYE with status 0.
         advanced = c.request("ADVANCE", 11, advance(0.0, 1e-3, n))
         assert advanced["type"] == "ADVANCED" and abs(advanced["body"]["t"] - 1e-3) < 1e-15, advanced

@@ -9,6 +9,7 @@ section picks the fault:
   mode = "silent"         stops answering and stops heartbeats after INIT (a hang)
   mode = "version"        says HELLO with protocol version 99 only
   mode = "error"          answers the first ADVANCE with ERROR diverged
+  mode = "error_exit"     answers the first ADVANCE with ERROR diverged and exits with status 1 at once
   mode = "wrong_seq"      answers the first ADVANCE with a seq that is not the request's
   mode = "early"          sends an ADVANCED right after READY, before any ADVANCE was asked for
   mode = "wrong_reply"    answers the first ADVANCE with ACK
@@ -114,8 +115,12 @@ def main():
                     sock.send(b"\xc1 this is not msgpack")
             elif mode == "crash":
                 os._exit(7)
-            elif mode == "error":
+            elif mode in ("error", "error_exit"):
                 send("ERROR", seq, {"code": "diverged", "message": "node 3: rotation = nan at t = 0.01 s", "in_reply_to": seq})
+                if mode == "error_exit":  # as a script ending in sys.exit(1) would: the ERROR leaves first
+                    with lock:
+                        sock.close(linger=2000)
+                    os._exit(1)
             elif mode == "stall":
                 stalled.set()  # the main thread is stuck; the heartbeat thread goes on
                 time.sleep(3600)

@@ -80,11 +80,17 @@ public:
     double messaging_seconds() const { return messaging_s_; }  // time spent encoding/decoding/sending
 
 private:
-    void pump(int wait_ms);
+    // Waits up to wait_ms for messages, takes all there are, then checks every participant's liveness.
+    // `interruptible`: a pending Ctrl-C throws Interrupted (not while saying goodbye).
+    void pump(int wait_ms, bool interruptible = true);
+    void receive_all();
     void handle_stranger(const std::string& identity, const zmq::message_t& payload);
     void file_reply(const std::string& role, protocol::Message m);
     void check_liveness();
-    void send_raw(const std::string& identity, const protocol::Message& m);
+    [[noreturn]] void report_exit(const std::string& role, const std::string& how);
+    // `droppable`: a heartbeat or a refusal to a stranger, dropped when the peer's queue is full (it does
+    // not read); any other message to a peer that does not take it within run.timeout_s names it as hung.
+    void send_raw(const std::string& identity, const protocol::Message& m, bool droppable = false);
     const std::string& identity_of(const std::string& role) const;
 
     zmq::context_t ctx_;
