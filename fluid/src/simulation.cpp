@@ -147,7 +147,7 @@ Simulation2D::Simulation2D(const FluidSettings& settings, Scene2D scene, double 
     grid_.configure(domain_lo_, domain_hi_, support_, s_.periodic);
 }
 
-void Simulation2D::add_solids(const std::vector<V>& reference, SolidKinematics kinematics,
+void Simulation2D::add_solids(const std::vector<V>& reference, const std::vector<V>& at_start, SolidKinematics kinematics,
                               const std::function<bool(const V&)>& inside_solid) {
     auto& P = st_.P;
     // Drop fluid particles that overlap the solid; ids are renumbered so they stay 0..n-1.
@@ -157,7 +157,7 @@ void Simulation2D::add_solids(const std::vector<V>& reference, SolidKinematics k
         bool drop = false;
         if (P.kind[i] == Kind::Fluid) {
             drop = inside_solid(P.x[i]);
-            for (std::size_t k = 0; !drop && k < reference.size(); ++k) drop = norm2(P.x[i] - reference[k]) < min_d2;
+            for (std::size_t k = 0; !drop && k < at_start.size(); ++k) drop = norm2(P.x[i] - at_start[k]) < min_d2;
         }
         if (drop) continue;
         kept.x.push_back(P.x[i]);

@@ -10,10 +10,16 @@ namespace {
 
 Vec2 row(const protocol::F64Array& a, std::size_t i) { return Vec2{{a(i, 0), a(i, 1)}}; }
 
+// Shape and values: a NaN at a dry vertex would put solid particles in no grid cell, silently, and travel
+// on into the next window, the record and the checkpoint.
 void check_shape(const protocol::F64Array& a, std::size_t n, const char* name) {
     if (a.shape.size() != 2 || a.rows() != n || a.cols() != 2)
         throw std::invalid_argument(std::string("interface input '") + name + "' must have shape (" + std::to_string(n) +
                                     ", 2), got " + std::to_string(a.rows()) + " x " + std::to_string(a.cols()));
+    for (std::size_t k = 0; k < a.values.size(); ++k)
+        if (!std::isfinite(a.values[k]))
+            throw std::invalid_argument(std::string("interface input '") + name + "' at vertex " + std::to_string(k / 2) +
+                                        " is not a finite number");
 }
 
 }  // namespace

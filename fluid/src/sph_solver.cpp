@@ -105,7 +105,7 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
         const GateLift lift{g.lift_speed, g.height};
         auto reference = gate_particles(settings_);
         sim_->add_solids(
-            reference,
+            reference, reference,
             [reference, lift](std::size_t k, double t, Vec2& x, Vec2& v, Vec2& a) {
                 double dy = 0.0, vy = 0.0;
                 lift.at(t, dy, vy);
@@ -181,8 +181,19 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
             }
             quads.push_back(q);
         }
+        // Where the solid particles start: deflected by the start displacement, as the cells above.
+        std::vector<Vec2> at_start = coupling->reference_positions();
+        if (!start_displacement_.empty())
+            for (std::size_t k = 0; k < at_start.size(); ++k) {
+                const auto& w = coupling->weights()[k];
+                for (int q = 0; q < 4; ++q) {
+                    const auto v = static_cast<std::uint64_t>(w.vertex[static_cast<std::size_t>(q)]);
+                    at_start[k] += Vec2{{start_displacement_[2 * v], start_displacement_[2 * v + 1]}} *
+                                   w.weight[static_cast<std::size_t>(q)];
+                }
+            }
         sim_->add_solids(
-            coupling->reference_positions(),
+            coupling->reference_positions(), at_start,
             [coupling](std::size_t k, double t, Vec2& x, Vec2& v, Vec2& a) { coupling->kinematics(k, t, x, v, a); },
             [quads, clearance](const Vec2& p) {
                 for (const auto& q : quads) {
@@ -205,7 +216,15 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
                 throw SolverError("bad_config", "checkpoint: it was written " + std::string(has_coupling ? "with" : "without") +
                                                     " an interface mesh, but this INIT " +
                                                     (coupling_ ? "has one" : "has none"));
-            if (coupling_) coupling_->set_state(read_coupling_state(r));
+            if (coupling_) {
+                const InterfaceCoupling::State state = read_coupling_state(r);
+                const std::size_t n = coupling_->vertex_count();
+                if (state.u0.size() != n || state.v0.size() != n || state.u1.size() != n || state.v1.size() != n)
+                    throw SolverError("bad_config", "checkpoint: its interface state has " + std::to_string(state.u0.size()) +
+                                                        " vertices, this INIT's mesh " + std::to_string(n) +
+                                                        ": resume with the scene that wrote it");
+                coupling_->set_state(state);
+            }
             if (!r.at_end()) throw SolverError("bad_config", "checkpoint: trailing bytes");
         } catch (const std::runtime_error& e) {
             if (dynamic_cast<const SolverError*>(&e)) throw;

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <random>
 #include <string>
 
@@ -42,10 +43,9 @@ Value small_dam_break(const std::string& model, const std::string& integrator = 
     return with(f, {{"time.integrator", integrator}});
 }
 
-// A horizontal plate of 2 x 8 quads ((0.2 .. 0.3) x (0.02 .. 0.04) m), vertices row-major.
-InterfaceMesh plate() {
+// A horizontal plate of ny x nx quads ((0.2 .. 0.3) x (0.02 .. 0.04) m), vertices row-major.
+InterfaceMesh plate(int nx = 8, int ny = 2) {
     InterfaceMesh m;
-    const int nx = 8, ny = 2;
     m.vertices = F64Array::zeros((nx + 1) * (ny + 1), 2);
     for (int j = 0; j <= ny; ++j)
         for (int i = 0; i <= nx; ++i) {
@@ -208,6 +208,55 @@ TEST_SUITE("adapter") {
         CHECK(message_of({1, 2, 3}).find("bad_config: checkpoint: truncated") == 0);
         std::vector<std::uint8_t> cut(bytes.begin(), bytes.end() - 1);
         CHECK(message_of(cut).find("bad_config: checkpoint: truncated") == 0);
+    }
+
+    // A checkpoint holds the interface state of its mesh. Resumed with another mesh that happens to make as
+    // many solid and fluid particles (a plate of 4 x 1 quads and one of 8 x 2 at dp = 2.5 mm: 320 solid
+    // particles each, 10 and 27 vertices), it is refused by name; it was once read as it came, and the solids
+    // then read vertex data beyond the 10 the checkpoint had.
+    TEST_CASE("a checkpoint of another interface mesh is refused by name") {
+        auto started = [&](const InterfaceMesh& mesh, std::vector<std::uint8_t> state) {
+            auto s = std::make_unique<SphSolver>();
+            sphfsi::protocol::InitRequest req;
+            req.config = plate_tank(0.0025);
+            req.interface = mesh;
+            req.state = std::move(state);
+            s->init(req);
+            return s;
+        };
+        auto coarse = started(plate(4, 1), {});
+        const auto bytes = coarse->checkpoint();
+        REQUIRE(started(plate(8, 2), {})->simulation().solid_count() == coarse->simulation().solid_count());
+        std::string what = "accepted";
+        try {
+            started(plate(8, 2), bytes);
+        } catch (const sphfsi::protocol::SolverError& e) {
+            what = e.code() + ": " + e.what();
+        }
+        CHECK(what.rfind("bad_config: checkpoint: its interface state has 10 vertices, this INIT's mesh 27", 0) == 0);
+    }
+
+    // A structure that starts deflected (INIT interface_state) clears the water where it starts, as an
+    // undeflected one does where it stands (docs/coupling.md, "Starting deflected"). plate() lifted by 4 dp
+    // in water: the same number of fluid particles is removed as for the plate in place, since the lattice
+    // is the same 4 rows up. It once also cleared around the undeflected plate's solid particles, a band of
+    // water the structure had left (160 particles more here).
+    TEST_CASE("a structure that starts deflected clears the water where it starts, not where it was drawn") {
+        const double dp = 0.0025;
+        auto fluid_left = [&](double lift) {
+            SphSolver s;
+            sphfsi::protocol::InitRequest req;
+            req.config = plate_tank(dp);
+            req.interface = plate();
+            F64Array u = F64Array::zeros(plate().vertices.rows(), 2);
+            for (std::size_t v = 0; v < u.rows(); ++v) u(v, 1) = lift;
+            if (lift != 0.0) req.interface_state["displacement"] = u;
+            s.init(req);
+            return s.simulation().fluid_count();
+        };
+        const std::size_t in_place = fluid_left(0.0), lifted = fluid_left(4 * dp);
+        MESSAGE("fluid particles: plate in place ", in_place, ", lifted by 4 dp ", lifted);
+        CHECK(lifted == in_place);
     }
 
     TEST_CASE("force mapping preserves total force and moment to round-off") {
@@ -387,6 +436,9 @@ TEST_SUITE("adapter") {
             };
             CHECK(code_of(F64Array::zeros(nv - 1, 2)) == "bad_message");
             CHECK(code_of(sphfsi::protocol::I32Array::zeros(nv, 2)) == "bad_message");
+            F64Array not_finite = F64Array::zeros(nv, 2);  // at a vertex whatever its side: wet or dry
+            not_finite(nv - 1, 1) = std::numeric_limits<double>::quiet_NaN();
+            CHECK(code_of(not_finite) == "bad_message");
         }
         // At rest, after the fluid has settled around it: Archimedes, rho0 g A = 1000 * 9.81 * 0.1 * 0.02 N/m up.
         // Tolerance 10 %: the solid's SPH surface sits half a spacing outside the mesh (dp/2 = 2.5 mm on 20 mm

@@ -41,9 +41,10 @@ public:
 
     Simulation2D(const FluidSettings& settings, Scene2D scene, double t0 = 0.0);
 
-    // Appends solid particles (before the first step). Fluid particles closer than 0.75 dp to one of them,
-    // or inside the solid's cells, are turned off by the caller's `inside` test: they are removed here.
-    void add_solids(const std::vector<V>& reference, SolidKinematics kinematics,
+    // Appends solid particles (before the first step) at `reference`. Fluid particles closer than 0.75 dp to
+    // where they start (`at_start`: a structure may start deflected), or inside the solid's cells by the
+    // caller's `inside` test, are removed.
+    void add_solids(const std::vector<V>& reference, const std::vector<V>& at_start, SolidKinematics kinematics,
                     const std::function<bool(const V&)>& inside_solid);
     void set_solid_kinematics(SolidKinematics kinematics) { kinematics_ = std::move(kinematics); }
 
