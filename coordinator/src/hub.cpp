@@ -269,7 +269,7 @@ void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) 
 // ERROR, which says what went wrong, not by its exit: the ERROR may reach us a moment after the exit, so the
 // socket is read for a little longer first.
 void Hub::report_exit(const std::string& role, const std::string& how) {
-    const auto until = Clock::now() + std::chrono::milliseconds(200);
+    const auto until = Clock::now() + std::chrono::milliseconds(500);  // (a loaded machine delivers late)
     while (Clock::now() < until) {
         for (const auto& [seq, m] : inbox_[role])
             if (m.type == MessageType::Error) throw reported(role, m.as<ErrorReply>());

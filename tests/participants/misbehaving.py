@@ -120,6 +120,7 @@ def main():
                 if mode == "error_exit":  # as a script ending in sys.exit(1) would: the ERROR leaves first
                     with lock:
                         sock.close(linger=2000)
+                        sock.context.term()  # returns once the ERROR is sent (a closed socket's I/O goes on until then)
                     os._exit(1)
             elif mode == "stall":
                 stalled.set()  # the main thread is stuck; the heartbeat thread goes on
