@@ -93,7 +93,7 @@ void Simulation2D::step_verlet(double dt) {
     accumulate_solid_forces(half);
     kick();
     drift(dt);
-    st_.t += dt;
+    st_.t = std::isnan(window_end_) ? st_.t + dt : window_end_;
     // A re-initialisation due at the end of this step comes before its evaluation, which the closing half-kick
     // and the next step use; after the step it would throw that evaluation away.
     if (reinitialisation_due(st_.step + 1)) reinitialise_densities();
@@ -276,6 +276,7 @@ WindowStats Simulation2D::advance(double t_end, std::uint32_t substeps, const st
         const double dt = (t_end - t_start) / substeps;
         for (std::uint32_t k = 0; k < substeps; ++k) {
             if (!st_.rates_fresh) evaluate();
+            window_end_ = k + 1 == substeps ? t_end : std::numeric_limits<double>::quiet_NaN();
             const double taken = take_step(dt, false, ws);
             if (k + 1 == substeps) st_.t = t_end;  // no drift from summing dt
             record(taken);
@@ -292,11 +293,13 @@ WindowStats Simulation2D::advance(double t_end, std::uint32_t substeps, const st
             const double steps_left = std::max(1.0, std::ceil(remaining / stable_dt() * (1.0 - 1e-12)));
             const bool last = steps_left == 1.0;
             const double dt = remaining / steps_left;  // exactly `remaining` when last
+            window_end_ = last ? t_end : std::numeric_limits<double>::quiet_NaN();
             const double taken = take_step(dt, true, ws);
             if (last && taken == dt) st_.t = t_end;
             record(taken);
         }
     }
+    window_end_ = std::numeric_limits<double>::quiet_NaN();
     if (ws.steps == 0) ws.dt_min = 0.0;
     if (step_log_) step_log_->flush();  // a window's lines are on disk when its reply goes out
     return ws;

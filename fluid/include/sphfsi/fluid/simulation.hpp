@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -192,6 +193,10 @@ private:
     std::vector<Mat<Dim>> correction_;  // per particle L of the pressure correction, recomputed each evaluation
     PcisphScratch<Dim> pci_;
     std::unique_ptr<std::ofstream> step_log_;
+    // The window's end while its last step is taken, else NaN: velocity Verlet's closing evaluation is at
+    // the step's end, which must be the window's end itself (not t plus the summed steps, a hair off), for
+    // the solids to end the window where the next one starts them (refresh_solid_rates).
+    double window_end_ = std::numeric_limits<double>::quiet_NaN();
 };
 
 }  // namespace sphfsi::fluid
