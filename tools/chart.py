@@ -125,6 +125,8 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
             failed.append((label, cx, r))
         elif not (cx > 0 and math.isfinite(cx)):
             failed.append((label, cx, dict(r, status="no cost")))
+        elif not str(r[y]).strip():  # completed, but its metric gave no value (the sweep's CSV says why)
+            failed.append((label, cx, dict(r, status="no value")))
         elif not (cy > 0 and math.isfinite(cy)):
             no_error.append((label, cx, r))
         else:
@@ -179,7 +181,7 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
     if failed:
         for i, (label, c, r) in enumerate(failed):
             ax.plot([at_x(c)], [0.965], "x", color=colours.get(label, "r"), ms=10, mew=2.2, transform=edge,
-                    clip_on=False, zorder=5, label="did not complete" if i == 0 else None)
+                    clip_on=False, zorder=5, label="did not complete, or no value" if i == 0 else None)
             if len(failed) <= 24:
                 ax.annotate(f"{r.get('status')}: {r.get('case') or label}", (at_x(c), 0.935), xycoords=edge, rotation=90,
                             fontsize=6.5, ha="center", va="top", color=colours.get(label, "r"))

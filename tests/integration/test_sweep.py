@@ -255,6 +255,19 @@ def test_charts_are_written():
     assert len(front) == 3 and all("integrator=backward_euler" in line for line in front), p.stdout
 
 
+def test_chart_names_a_completed_run_whose_metric_has_no_value():
+    """A run that completed but whose metric could not be computed (an empty cell in results.csv) is drawn
+    and counted apart from the plotted points, as not having a value; it was once drawn as a run with no
+    positive error, which reads as exact."""
+    rows = [{"status": "completed", "cpu_s": "1.0", "err": "0.1", "m": "a"},
+            {"status": "completed", "cpu_s": "2.0", "err": "0.05", "m": "a"},
+            {"status": "completed", "cpu_s": "3.0", "err": "", "m": "a"},
+            {"status": "completed", "cpu_s": "4.0", "err": "0", "m": "a"}]
+    prefix = os.path.join(harness.out_dir("chart-no-value"), "chart")
+    summary = chart.make_chart(rows, "cpu_s", "err", ["m"], prefix)
+    assert (summary["plotted"], summary["failed"], summary["no_error"]) == (2, 1, 1), summary
+
+
 FAKE_COORDINATOR = r'''
 import os, signal, subprocess, sys, time
 # A coordinator that ignores SIGINT, with a "participant" in its own process group that ignores SIGINT and
