@@ -4,6 +4,7 @@
 #include <msgpack.hpp>
 #include <sstream>
 
+#include "sphfsi/coordinator/replace_file.hpp"
 #include "sphfsi/protocol/msgpack_writer.hpp"
 
 namespace sphfsi::coordinator {
@@ -62,15 +63,7 @@ void write_checkpoint(const std::filesystem::path& file, const Checkpoint& c) {
         pk.pack(role);
         pk.bin(bytes.data(), bytes.size());
     }
-    auto tmp = file;
-    tmp += ".tmp";
-    {
-        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        out.write(pk.bytes().data(), static_cast<std::streamsize>(pk.bytes().size()));
-        out.flush();
-        if (!out) throw std::runtime_error("cannot write checkpoint " + tmp.string());
-    }
-    std::filesystem::rename(tmp, file);
+    replace_file(file, pk.bytes(), "checkpoint");
 }
 
 Checkpoint read_checkpoint(const std::filesystem::path& file) {

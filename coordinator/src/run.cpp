@@ -149,7 +149,7 @@ int Runner::execute() {
         return 2;
     }
     if (!resume)  // a fresh run: what an earlier run left here must not be resumed or read as this run's
-        for (const char* stale : {"checkpoint.bin", "record.xdmf", "watchpoints.csv", "watchpoints.csv.resuming",
+        for (const char* stale : {"checkpoint.bin", "record.xdmf", "watchpoints.csv", "watchpoints.csv.tmp",
                                   "record.h5.resuming", "record.h5.creating"})
             std::filesystem::remove(opt_.out_dir / stale);
     log_file_.open(opt_.out_dir / "run.log", resume ? std::ios::app : std::ios::trunc);

@@ -5,8 +5,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iterator>
-#include <stdexcept>
 #include <sstream>
+
+#include "sphfsi/coordinator/replace_file.hpp"
 
 namespace sphfsi::coordinator {
 
@@ -55,15 +56,7 @@ Watchpoints::Watchpoints(const std::filesystem::path& file, const Value& scene, 
             break;
         kept += line + "\n";
     }
-    auto fresh = file;
-    fresh += ".resuming";
-    {
-        std::ofstream f(fresh, std::ios::trunc);
-        f << kept;
-        f.flush();
-        if (!f) throw std::runtime_error("cannot write " + fresh.string());
-    }
-    std::filesystem::rename(fresh, file);
+    replace_file(file, kept, "watchpoints");
     out_.open(file, std::ios::app);
 }
 

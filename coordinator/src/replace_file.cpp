@@ -1,0 +1,21 @@
+#include "sphfsi/coordinator/replace_file.hpp"
+
+#include <fstream>
+#include <stdexcept>
+#include <string>
+
+namespace sphfsi::coordinator {
+
+void replace_file(const std::filesystem::path& file, std::string_view bytes, std::string_view what) {
+    auto tmp = file;
+    tmp += ".tmp";
+    {
+        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+        out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+        out.flush();
+        if (!out) throw std::runtime_error("cannot write " + std::string(what) + " " + tmp.string());
+    }
+    std::filesystem::rename(tmp, file);
+}
+
+}  // namespace sphfsi::coordinator
