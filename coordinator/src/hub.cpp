@@ -122,6 +122,12 @@ void Hub::goodbye(double timeout_s) {
 }
 
 void Hub::pump(int wait_ms, bool interruptible) {
+    wait_for_input(wait_ms, interruptible);
+    receive_all();
+    check_liveness();
+}
+
+void Hub::wait_for_input(int wait_ms, bool interruptible) {
     if (interruptible && g_interrupted) throw Interrupted();
     zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
     try {
@@ -130,8 +136,6 @@ void Hub::pump(int wait_ms, bool interruptible) {
         if (e.num() != EINTR) throw;
         if (interruptible && g_interrupted) throw Interrupted();  // a signal woke us: SIGINT/SIGTERM asks to stop
     }
-    receive_all();
-    check_liveness();
 }
 
 void Hub::receive_all() {
@@ -273,12 +277,7 @@ void Hub::report_exit(const std::string& role, const std::string& how) {
     while (Clock::now() < until) {
         for (const auto& [seq, m] : inbox_[role])
             if (m.type == MessageType::Error) throw reported(role, m.as<ErrorReply>());
-        zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
-        try {
-            zmq::poll(&item, 1, std::chrono::milliseconds(20));
-        } catch (const zmq::error_t& e) {
-            if (e.num() != EINTR) throw;
-        }
+        wait_for_input(20, false);
         receive_all();
     }
     throw ParticipantFailure(role, "died", how);

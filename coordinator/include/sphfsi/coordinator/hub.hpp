@@ -83,6 +83,7 @@ private:
     // Waits up to wait_ms for messages, takes all there are, then checks every participant's liveness.
     // `interruptible`: a pending Ctrl-C throws Interrupted (not while saying goodbye).
     void pump(int wait_ms, bool interruptible = true);
+    void wait_for_input(int wait_ms, bool interruptible);  // up to wait_ms, until a message is there
     void receive_all();
     void handle_stranger(const std::string& identity, const zmq::message_t& payload);
     void file_reply(const std::string& role, protocol::Message m);
