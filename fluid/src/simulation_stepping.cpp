@@ -43,7 +43,7 @@ void Simulation2D::density_rates() {
     });
 }
 
-void Simulation2D::step_symplectic(double dt) {
+void Simulation2D::step_symplectic(double dt, double t_after) {
     // Semi-implicit Euler (the thesis): v^{n+1} = v^n + dt a^n, then the position-like variables from the
     // new velocities: x^{n+1} = x^n + dt v^{n+1}, rho^{n+1} = rho^n + dt drho(x^n, v^{n+1}).
     auto& P = st_.P;
@@ -55,7 +55,7 @@ void Simulation2D::step_symplectic(double dt) {
         if (P.kind[i] == Kind::Fluid) P.v[i] += P.a[i] * dt;
     }
     drift(dt);
-    st_.t += dt;
+    st_.t = t_after;
     st_.rates_fresh = false;
 }
 
@@ -77,7 +77,7 @@ void Simulation2D::drift(double dt) {
     }
 }
 
-void Simulation2D::step_verlet(double dt) {
+void Simulation2D::step_verlet(double dt, double t_after) {
     // Velocity Verlet (kick-drift-kick) with density drifting like position: the rates of the previous
     // evaluation start the step, one force evaluation per step at the new positions and densities.
     auto& P = st_.P;
@@ -93,7 +93,7 @@ void Simulation2D::step_verlet(double dt) {
     accumulate_solid_forces(half);
     kick();
     drift(dt);
-    st_.t = std::isnan(window_end_) ? st_.t + dt : window_end_;
+    st_.t = t_after;
     // A re-initialisation due at the end of this step comes before its evaluation, which the closing half-kick
     // and the next step use; after the step it would throw that evaluation away.
     if (reinitialisation_due(st_.step + 1)) reinitialise_densities();
@@ -103,7 +103,7 @@ void Simulation2D::step_verlet(double dt) {
     st_.rates_fresh = true;  // a^{n+1} at (x^{n+1}, rho^{n+1}, v^{n+1/2}) starts the next step
 }
 
-void Simulation2D::step_predictor_corrector(double dt) {
+void Simulation2D::step_predictor_corrector(double dt, double t_after) {
     // Monaghan (1989): predict to the half step, evaluate there, then
     // v^{n+1} = v^n + dt a^{n+1/2}, x^{n+1} = x^n + dt (v^n + dt/2 a^{n+1/2}), rho likewise.
     auto& P = st_.P;
@@ -142,7 +142,7 @@ void Simulation2D::step_predictor_corrector(double dt) {
             P.rho[i] = P.rho_start[i] + P.drho[i] * dt;
         }
     }
-    st_.t = t0 + dt;
+    st_.t = t_after;
     st_.rates_fresh = false;
 }
 
@@ -158,11 +158,12 @@ double Simulation2D::max_predicted_displacement() const {
     return std::sqrt(d2);
 }
 
-double Simulation2D::step_pcisph(double dt, bool adaptive, WindowStats& ws) {
+double Simulation2D::step_pcisph(double dt, double t_after, bool adaptive, WindowStats& ws) {
     auto& P = st_.P;
     const std::size_t n = P.size();
     const long long nn = static_cast<long long>(n);
     pci_.resize(n);
+    const double dt_whole = dt;
     // Boundary particles' end-of-step positions: walls stay, solids go to t + dt.
     while (true) {
         const double t_end = st_.t + dt;
@@ -230,22 +231,22 @@ double Simulation2D::step_pcisph(double dt, bool adaptive, WindowStats& ws) {
     }
     st_.a_max_last = std::sqrt(a2);
     accumulate_solid_forces(dt);
-    st_.t += dt;
+    st_.t = dt == dt_whole ? t_after : st_.t + dt;  // a halved step does not reach t_after
     st_.rates_fresh = false;
     return dt;
 }
 
-double Simulation2D::take_step(double dt, bool adaptive, WindowStats& ws) {
+double Simulation2D::take_step(double dt, double t_after, bool adaptive, WindowStats& ws) {
     step_dt_ = dt;
     switch (s_.pressure == PressureModel::Pcisph ? Integrator::SymplecticEuler : s_.integrator) {
         case Integrator::SymplecticEuler:
             if (s_.pressure == PressureModel::Pcisph)
-                dt = step_pcisph(dt, adaptive, ws);
+                dt = step_pcisph(dt, t_after, adaptive, ws);
             else
-                step_symplectic(dt);
+                step_symplectic(dt, t_after);
             break;
-        case Integrator::VelocityVerlet: step_verlet(dt); break;
-        case Integrator::PredictorCorrector: step_predictor_corrector(dt); break;
+        case Integrator::VelocityVerlet: step_verlet(dt, t_after); break;
+        case Integrator::PredictorCorrector: step_predictor_corrector(dt, t_after); break;
     }
     ++st_.step;
     // Velocity Verlet re-initialises inside its step, before its one evaluation (step_verlet).
@@ -276,9 +277,7 @@ WindowStats Simulation2D::advance(double t_end, std::uint32_t substeps, const st
         const double dt = (t_end - t_start) / substeps;
         for (std::uint32_t k = 0; k < substeps; ++k) {
             if (!st_.rates_fresh) evaluate();
-            window_end_ = k + 1 == substeps ? t_end : std::numeric_limits<double>::quiet_NaN();
-            const double taken = take_step(dt, false, ws);
-            if (k + 1 == substeps) st_.t = t_end;  // no drift from summing dt
+            const double taken = take_step(dt, k + 1 == substeps ? t_end : st_.t + dt, false, ws);  // no drift from summing dt
             record(taken);
         }
     } else {
@@ -293,13 +292,10 @@ WindowStats Simulation2D::advance(double t_end, std::uint32_t substeps, const st
             const double steps_left = std::max(1.0, std::ceil(remaining / stable_dt() * (1.0 - 1e-12)));
             const bool last = steps_left == 1.0;
             const double dt = remaining / steps_left;  // exactly `remaining` when last
-            window_end_ = last ? t_end : std::numeric_limits<double>::quiet_NaN();
-            const double taken = take_step(dt, true, ws);
-            if (last && taken == dt) st_.t = t_end;
+            const double taken = take_step(dt, last ? t_end : st_.t + dt, true, ws);
             record(taken);
         }
     }
-    window_end_ = std::numeric_limits<double>::quiet_NaN();
     if (ws.steps == 0) ws.dt_min = 0.0;
     if (step_log_) step_log_->flush();  // a window's lines are on disk when its reply goes out
     return ws;

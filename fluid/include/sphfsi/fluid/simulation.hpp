@@ -5,7 +5,6 @@
 #include <cstdint>
 #include <fstream>
 #include <functional>
-#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -133,13 +132,17 @@ private:
     }
     void move_solids(double t);
     void reduce_rates();
-    double take_step(double dt, bool adaptive, WindowStats& ws);
-    void step_symplectic(double dt);
+    // A step of dt that ends at t_after when taken whole: on a window's last step the window's end itself,
+    // not t plus the summed steps, which can be a hair off (velocity Verlet evaluates there, and the solids
+    // must end the window where the next one starts them: refresh_solid_rates). Returns the step taken
+    // (PCISPH may halve it).
+    double take_step(double dt, double t_after, bool adaptive, WindowStats& ws);
+    void step_symplectic(double dt, double t_after);
     void drift(double dt);
     void density_rates();
-    void step_verlet(double dt);
-    void step_predictor_corrector(double dt);
-    double step_pcisph(double dt, bool adaptive, WindowStats& ws);
+    void step_verlet(double dt, double t_after);
+    void step_predictor_corrector(double dt, double t_after);
+    double step_pcisph(double dt, double t_after, bool adaptive, WindowStats& ws);
     double max_predicted_displacement() const;  // of the PCISPH prediction in pci_, fluid particles
     // The largest PCISPH prediction accepted, and the one the step size aims at, as fractions of the kernel
     // support: beyond pcisph_reach a particle misses neighbours its neighbour lists do not hold.
@@ -193,10 +196,6 @@ private:
     std::vector<Mat<Dim>> correction_;  // per particle L of the pressure correction, recomputed each evaluation
     PcisphScratch<Dim> pci_;
     std::unique_ptr<std::ofstream> step_log_;
-    // The window's end while its last step is taken, else NaN: velocity Verlet's closing evaluation is at
-    // the step's end, which must be the window's end itself (not t plus the summed steps, a hair off), for
-    // the solids to end the window where the next one starts them (refresh_solid_rates).
-    double window_end_ = std::numeric_limits<double>::quiet_NaN();
 };
 
 }  // namespace sphfsi::fluid
