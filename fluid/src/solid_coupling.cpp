@@ -64,6 +64,17 @@ InterfaceCoupling::InterfaceCoupling(const protocol::InterfaceMesh& mesh, double
     state_.v1 = state_.v0;
 }
 
+std::vector<Vec2> InterfaceCoupling::displaced_positions(const std::vector<double>& displacement) const {
+    std::vector<Vec2> x = particles_ref_;
+    if (displacement.empty()) return x;
+    for (std::size_t k = 0; k < x.size(); ++k)
+        for (int q = 0; q < 4; ++q) {
+            const auto v = static_cast<std::size_t>(weights_[k].vertex[static_cast<std::size_t>(q)]);
+            x[k] += Vec2{{displacement[2 * v], displacement[2 * v + 1]}} * weights_[k].weight[static_cast<std::size_t>(q)];
+        }
+    return x;
+}
+
 void InterfaceCoupling::begin_window(double t0, double dt, const protocol::F64Array* displacement,
                                      const protocol::F64Array* velocity) {
     const std::size_t n = reference_.size();

@@ -181,19 +181,8 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
             }
             quads.push_back(q);
         }
-        // Where the solid particles start: deflected by the start displacement, as the cells above.
-        std::vector<Vec2> at_start = coupling->reference_positions();
-        if (!start_displacement_.empty())
-            for (std::size_t k = 0; k < at_start.size(); ++k) {
-                const auto& w = coupling->weights()[k];
-                for (int q = 0; q < 4; ++q) {
-                    const auto v = static_cast<std::uint64_t>(w.vertex[static_cast<std::size_t>(q)]);
-                    at_start[k] += Vec2{{start_displacement_[2 * v], start_displacement_[2 * v + 1]}} *
-                                   w.weight[static_cast<std::size_t>(q)];
-                }
-            }
         sim_->add_solids(
-            coupling->reference_positions(), at_start,
+            coupling->reference_positions(), coupling->displaced_positions(start_displacement_),  // as the cells
             [coupling](std::size_t k, double t, Vec2& x, Vec2& v, Vec2& a) { coupling->kinematics(k, t, x, v, a); },
             [quads, clearance](const Vec2& p) {
                 for (const auto& q : quads) {

@@ -30,6 +30,9 @@ public:
     std::size_t vertex_count() const { return reference_.size(); }
     const std::vector<Vec2>& reference_positions() const { return particles_ref_; }
     const std::vector<SolidParticleWeights>& weights() const { return weights_; }
+    // The particles' positions with the vertices displaced by `displacement` (2 values per vertex, as a
+    // checkpoint keeps it; empty: the reference positions).
+    std::vector<Vec2> displaced_positions(const std::vector<double>& displacement) const;
 
     // Starts a window [t0, t0 + dt] whose end values are `displacement` / `velocity` ((n, 2) each; a null
     // pointer keeps the window-start values: the structure stands still).
