@@ -68,6 +68,20 @@ InterfaceMesh plate(int nx = 8, int ny = 2) {
 // The WCSPH tank plate() lies in: 0.5 m x 0.2 m, water 0.1 m deep, at spacing dp.
 Value plate_tank(double dp) { return wcsph(water_tank(dp, 0.5, 0.2, 0.5, 0.1)); }
 
+// A fluid around an interface mesh, as INIT starts it: with the structure's start state, or resumed from a
+// checkpoint.
+std::unique_ptr<SphSolver> start_around(const Value& config, const InterfaceMesh& mesh, Fields interface_state = {},
+                                        std::vector<std::uint8_t> state = {}) {
+    auto s = std::make_unique<SphSolver>();
+    sphfsi::protocol::InitRequest req;
+    req.config = config;
+    req.interface = mesh;
+    req.interface_state = std::move(interface_state);
+    req.state = std::move(state);
+    s->init(req);
+    return s;
+}
+
 // plate()'s window-end inputs after rising from rest at the constant acceleration that reaches vertical
 // velocity vy at the end of a window `window` long.
 Fields rising_plate(double vy, double window) {
@@ -215,21 +229,13 @@ TEST_SUITE("adapter") {
     // particles each, 10 and 27 vertices), it is refused by name; it was once read as it came, and the solids
     // then read vertex data beyond the 10 the checkpoint had.
     TEST_CASE("a checkpoint of another interface mesh is refused by name") {
-        auto started = [&](const InterfaceMesh& mesh, std::vector<std::uint8_t> state) {
-            auto s = std::make_unique<SphSolver>();
-            sphfsi::protocol::InitRequest req;
-            req.config = plate_tank(0.0025);
-            req.interface = mesh;
-            req.state = std::move(state);
-            s->init(req);
-            return s;
-        };
-        auto coarse = started(plate(4, 1), {});
+        const Value config = plate_tank(0.0025);
+        auto coarse = start_around(config, plate(4, 1));
         const auto bytes = coarse->checkpoint();
-        REQUIRE(started(plate(8, 2), {})->simulation().solid_count() == coarse->simulation().solid_count());
+        REQUIRE(start_around(config, plate(8, 2))->simulation().solid_count() == coarse->simulation().solid_count());
         std::string what = "accepted";
         try {
-            started(plate(8, 2), bytes);
+            start_around(config, plate(8, 2), {}, bytes);
         } catch (const sphfsi::protocol::SolverError& e) {
             what = e.code() + ": " + e.what();
         }
@@ -244,15 +250,11 @@ TEST_SUITE("adapter") {
     TEST_CASE("a structure that starts deflected clears the water where it starts, not where it was drawn") {
         const double dp = 0.0025;
         auto fluid_left = [&](double lift) {
-            SphSolver s;
-            sphfsi::protocol::InitRequest req;
-            req.config = plate_tank(dp);
-            req.interface = plate();
             F64Array u = F64Array::zeros(plate().vertices.rows(), 2);
             for (std::size_t v = 0; v < u.rows(); ++v) u(v, 1) = lift;
-            if (lift != 0.0) req.interface_state["displacement"] = u;
-            s.init(req);
-            return s.simulation().fluid_count();
+            return start_around(plate_tank(dp), plate(), lift != 0.0 ? Fields{{"displacement", u}} : Fields{})
+                ->simulation()
+                .fluid_count();
         };
         const std::size_t in_place = fluid_left(0.0), lifted = fluid_left(4 * dp);
         MESSAGE("fluid particles: plate in place ", in_place, ", lifted by 4 dp ", lifted);
@@ -305,11 +307,8 @@ TEST_SUITE("adapter") {
                            {{"periodic", "xy"}, {"boundary.slip", slip}, {"viscosity.alpha", 0.1}, {"boundary.repulsive", true},
                             {"pressure.c0", 20.0}, {"pressure.clamp_negative", false}});
             f.as_table_mut()["gravity"] = vec2(0.0, 0.0);
-            SphSolver s;
-            sphfsi::protocol::InitRequest req;
-            req.config = f;
-            req.interface = plate();
-            s.init(req);
+            const auto solver = start_around(f, plate());
+            SphSolver& s = *solver;
             // The solver offers no way to set velocities (a scene never needs one), so the test writes them.
             auto& P = const_cast<sphfsi::fluid::ParticleStore<2>&>(s.simulation().particles());
             for (std::size_t i = 0; i < P.size(); ++i)
@@ -492,11 +491,8 @@ TEST_SUITE("adapter") {
     // itself, where the next window starts the solids, or the next window finds them moved and evaluates
     // everything again. It once evaluated at t plus the summed steps, a hair off in 2 of these 30 windows.
     TEST_CASE("velocity Verlet ends a window's solids where the next window starts them") {
-        SphSolver s;
-        sphfsi::protocol::InitRequest req;
-        req.config = with(plate_tank(0.004), {{"time.integrator", "velocity_verlet"}});
-        req.interface = plate();
-        s.init(req);
+        const auto solver = start_around(with(plate_tank(0.004), {{"time.integrator", "velocity_verlet"}}), plate());
+        SphSolver& s = *solver;
         const auto& P = s.simulation().particles();
         int windows_off = 0;
         for (int w = 1; w <= 30; ++w) {
