@@ -147,9 +147,10 @@ def test_a_resume_stopped_at_any_moment_keeps_the_history():
 
 def test_a_resume_keeps_the_window_columns_of_the_interrupted_run():
     """The window columns are those of a run's first window (a stats name first sent later is named and not
-    recorded, test_lifecycle.py), and the root totals sum them. A resume keeps both: it once chose them again from its own first window, so
-    the misbehaving participant's "late" stat, sent from t > 0, became a column holding only the resumed
-    windows, shorter than the others, and the next resume cut the whole table to its length."""
+    recorded, test_lifecycle.py), and the root totals sum them. A resume keeps both: it once chose the
+    columns again from its own first window, so the misbehaving participant's "late" stat, sent from t > 0,
+    became a column holding only the resumed windows, shorter than the others, and the next resume cut the
+    whole table to its length."""
     scene = os.path.join(harness.SCENES, "misbehaving.toml")
     settings = ["--set", 'structure.mode="stats_late"', "--set", "run.end_time=200.0",
                 "--set", "run.checkpoint_interval=0.5", "--set", "run.output_interval=0.5"]

@@ -137,7 +137,8 @@ public:
         return xt + Wk * a;
     }
     // The last iteration's pair is not added (preCICE adds it): measured, it cost iterations or changed
-    // nothing in every scene we tried (docs/coupling.md). A window that converged in two iterations or fewer stores nothing.
+    // nothing in every scene we tried (docs/coupling.md). A window that converged in two iterations or fewer
+    // stores nothing.
     void end_window() override {
         if (reuse_ == 0 || V_.empty()) return;
         past_.emplace_front(V_, W_);
