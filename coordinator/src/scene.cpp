@@ -45,6 +45,16 @@ std::string read_file(const std::filesystem::path& file) {
     return s.str();
 }
 
+// An override's values are marked as such (Value::kFromOverride), children included: a nested --set table's
+// keys would otherwise carry line 1 of the text "x = ..." they were parsed from.
+void mark_override(Value& v) {
+    v.line = Value::kFromOverride;
+    if (v.is_table())
+        for (auto& [k, child] : v.as_table_mut()) mark_override(child);
+    else if (v.is_array())
+        for (auto& child : v.as_array_mut()) mark_override(child);
+}
+
 }  // namespace
 
 void apply_override(Value& root, const std::string& assignment) {
@@ -64,7 +74,7 @@ void apply_override(Value& root, const std::string& assignment) {
             throw ConfigError("--set " + assignment + ": the value is not valid TOML (" + std::string(e.description()) + ")");
         v = Value(text);
     }
-    v.line = 0;
+    mark_override(v);
     set_path(root, key, std::move(v));
 }
 
@@ -75,8 +85,12 @@ std::optional<std::vector<std::string>> Scene::custom_program(std::string_view r
     std::vector<std::string> words;
     std::istringstream in(cmd->as_string());
     for (std::string w; in >> w;) {
-        // Relative paths (anything with a slash) are relative to the scene file, so scenes are portable.
-        if (w.find('/') != std::string::npos && w.front() != '/') w = (file.parent_path() / w).lexically_normal().string();
+        // Paths are relative to the scene file, so scenes are portable: the program when it has a slash, and
+        // arguments written ./x or ../x. Other arguments with a slash (--opt=a/b, tcp://host) are left alone.
+        const bool program = words.empty();
+        const bool relative = w.starts_with("./") || w.starts_with("../") ||
+                              (program && w.find('/') != std::string::npos && w.front() != '/');
+        if (relative) w = (file.parent_path() / w).lexically_normal().string();
         words.push_back(w);
     }
     return words;
@@ -107,6 +121,9 @@ Scene parse_scene(std::string text, const std::filesystem::path& file, const std
             throw ConfigError(file.string() + ": " + e.what());
         }
     }
+    // A coupled scene's [coupling] may be left out: every key has a default.
+    if (raw.is_table() && raw.contains("fluid") && raw.contains("structure") && !raw.contains("coupling"))
+        set_path(raw, "coupling", Value(Value::Table{}));
     std::vector<std::string> external;
     if (const Value* p = raw.find("participants"); p && p->is_table())
         for (const auto& [role, cmd] : p->as_table()) external.push_back(role);

@@ -1,9 +1,11 @@
 // The keys of a whole scene: the coordinator's own sections here, [fluid] and [structure] from the
 // solver libraries' schemas (so a scene is checked completely before any process starts).
 #include <algorithm>
+#include <cctype>
 #include <sstream>
 
 #include "sphfsi/coordinator/scene.hpp"
+#include "sphfsi/coordinator/scene_cross_checks.hpp"
 #include "sphfsi/fluid/schema.hpp"
 #include "sphfsi/structure/schema.hpp"
 
@@ -107,16 +109,46 @@ void load_section(schema::TableSchema& s) {
 
 void watchpoint_section(schema::TableSchema& s) {
     auto& w = s.table_array("watchpoint", "A named point on the structure whose displacement goes to watchpoints.csv.");
-    w.string("name", "Column name, e.g. tip.").required();
+    w.string("name", "Name in watchpoints.csv, e.g. tip: letters, digits, '_', '.' and '-'.").required();
     w.number("x", "Reference position x.").unit("m").required();
     w.number("y", "Reference position y.").unit("m").required();
+    // watchpoints.csv is written unquoted, and a resume keeps its rows by their comma count: a comma or a
+    // line break in a name would cut the earlier rows off.
+    w.check([](const Value& t, const std::string& path, schema::Errors& e) {
+        const std::string& name = t.at("name").as_string();
+        const bool plain = !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
+            return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '-';
+        });
+        if (!plain)
+            e.add(&t.at("name"), "key '" + path + ".name': got \"" + name +
+                                     "\"; allowed: a non-empty name of letters, digits, '_', '.' and '-'");
+    });
+}
+
+// Two watchpoints of one name would be two curves under one label in watchpoints.csv.
+void check_watchpoint_names(const Value& scene, schema::Errors& e) {
+    const Value* points = scene.find("watchpoint");
+    if (!points) return;
+    const auto& list = points->as_array();
+    for (std::size_t i = 0; i < list.size(); ++i)
+        for (std::size_t j = 0; j < i; ++j)
+            if (list[i].at("name").as_string() == list[j].at("name").as_string())
+                e.add(&list[i].at("name"), "key 'watchpoint[" + std::to_string(i) + "].name': \"" +
+                                               list[i].at("name").as_string() + "\" is watchpoint[" + std::to_string(j) +
+                                               "]'s name too; allowed: a name of its own");
 }
 
 void participants_section(schema::TableSchema& s) {
     auto& p = s.table("participants", "Replace a built-in participant by another program (its section is then "
-                                      "checked by that program at INIT). Paths with a slash are relative to the scene file.");
+                                      "checked by that program at INIT). The program, when its path has a slash, and "
+                                      "arguments written ./x or ../x are relative to the scene file.");
     p.string("fluid", "Command line of the fluid program.");
     p.string("structure", "Command line of the structure program.");
+    p.check([](const Value& t, const std::string& path, schema::Errors& e) {
+        for (const auto& [role, cmd] : t.as_table())
+            if (cmd.is_string() && cmd.as_string().find_first_not_of(" \t") == std::string::npos)
+                e.add(&cmd, "key '" + path + "." + role + "': empty; allowed: a command line, program first");
+    });
 }
 
 void add_solver_section(schema::TableSchema& s, const std::string& role, const schema::TableSchema& builtin,
@@ -140,7 +172,7 @@ schema::TableSchema scene_schema(const std::vector<std::string>& external) {
     watchpoint_section(s);
     add_solver_section(s, "fluid", fluid::scene_schema(), external);
     add_solver_section(s, "structure", structure::scene_schema(), external);
-    s.check([](const Value& t, const std::string&, schema::Errors& e) {
+    s.check([external](const Value& t, const std::string&, schema::Errors& e) {
         bool fluid = t.contains("fluid"), structure = t.contains("structure");
         if (!fluid && !structure) e.add(&t, "the scene has neither [fluid] nor [structure]; it needs at least one");
         if (t.contains("load") && !structure) e.add(t.find("load"), "[load] drives a structure, but the scene has no [structure]");
@@ -155,6 +187,8 @@ schema::TableSchema scene_schema(const std::vector<std::string>& external) {
         if (const Value* c = t.find("coupling"))
             if (c->at("window").as_string() == "fixed" && !c->contains("window_dt"))
                 e.add(c, "missing key 'coupling.window_dt'; required when coupling.window = \"fixed\"");
+        check_watchpoint_names(t, e);
+        check_across_sections(t, external, e);
     });
     return s;
 }

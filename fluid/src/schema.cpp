@@ -20,6 +20,16 @@ std::string key(const std::string& path, const std::string& name) { return path.
 
 double num(const Value& t, std::string_view k) { return t.at(k).as_double(); }
 
+// A length in a message, as short as it reads (std::to_string prints 1e300 with 300 digits).
+std::string show(double x) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.6g", x);
+    return buf;
+}
+
+// Walls thicker than this are a typo: the widest support allowed, the Gaussian's 3 h at h_over_dp = 8/3, fits.
+constexpr int kMaxWallLayers = 8;
+
 // Small slack so that a block written as 0.1 m wide in a 0.1 m tank is not rejected by rounding.
 constexpr double slack = 1e-9;
 
@@ -42,23 +52,35 @@ void check_boxes_inside_tank(const Value& fluid, const std::string& path, Errors
                                    "] m does not lie inside the tank [0, " + std::to_string(W) + "] x [0, " +
                                    std::to_string(H) + "] m");
             if (w < dp * (1 - 1e-9) || h < dp * (1 - 1e-9))
-                errors.add(&b, "key '" + where + "': the box is thinner than one particle spacing dp = " + std::to_string(dp) + " m");
+                errors.add(&b, "key '" + where + "': the box is thinner than one particle spacing dp = " + show(dp) + " m");
         }
     }
+    if (W < dp * (1 - 1e-9) || H < dp * (1 - 1e-9))
+        errors.add(&fluid.at("dp"), "key '" + key(path, "dp") + "': " + show(dp) + " m is more than the tank's " +
+                                        (W < H ? "width" : "height") + " (" + show(std::min(W, H)) +
+                                        " m); allowed: at most the tank's smaller side");
     const Value* water = fluid.find("water");
-    const Value* obstacles = fluid.find("obstacle");
-    if (!water || !obstacles) return;
-    std::size_t i = 0;
-    for (const Value& b : water->as_array()) {
-        std::size_t j = 0;
-        for (const Value& o : obstacles->as_array()) {
-            if (spans_overlap(num(b, "x0"), num(b, "x0") + num(b, "width"), num(o, "x0"), num(o, "x0") + num(o, "width")) &&
-                spans_overlap(num(b, "y0"), num(b, "y0") + num(b, "height"), num(o, "y0"), num(o, "y0") + num(o, "height")))
-                errors.add(&b, "key '" + key(path, "water[" + std::to_string(i) + "]") + "': overlaps obstacle[" +
-                                   std::to_string(j) + "]; water and static walls must not share space");
-            ++j;
+    if (!water) return;
+    auto boxes_overlap = [](const Value& a, const Value& b) {
+        return spans_overlap(num(a, "x0"), num(a, "x0") + num(a, "width"), num(b, "x0"), num(b, "x0") + num(b, "width")) &&
+               spans_overlap(num(a, "y0"), num(a, "y0") + num(a, "height"), num(b, "y0"), num(b, "y0") + num(b, "height"));
+    };
+    const auto& blocks = water->as_array();
+    for (std::size_t i = 0; i < blocks.size(); ++i) {
+        // Two blocks over the same space would lay particles on top of each other: twice the mass there.
+        for (std::size_t j = 0; j < i; ++j)
+            if (boxes_overlap(blocks[i], blocks[j]))
+                errors.add(&blocks[i], "key '" + key(path, "water[" + std::to_string(i) + "]") + "': overlaps water[" +
+                                           std::to_string(j) + "]; blocks of water must not share space");
+        if (const Value* obstacles = fluid.find("obstacle")) {
+            std::size_t j = 0;
+            for (const Value& o : obstacles->as_array()) {
+                if (boxes_overlap(blocks[i], o))
+                    errors.add(&blocks[i], "key '" + key(path, "water[" + std::to_string(i) + "]") + "': overlaps obstacle[" +
+                                               std::to_string(j) + "]; water and static walls must not share space");
+                ++j;
+            }
         }
-        ++i;
     }
 }
 
@@ -108,6 +130,11 @@ void check_combinations(const Value& fluid, const std::string& path, Errors& err
         errors.add(&density, "key '" + key(path, "density.method") +
                                  "': PCISPH predicts densities by summation; allowed with pressure.model = \"pcisph\": "
                                  "\"summation\", \"shepard\"");
+    if (model == "pcisph" && pressure.at("min_iterations").as_int() > pressure.at("max_iterations").as_int())
+        errors.add(&pressure, "key '" + key(path, "pressure.min_iterations") + "': " +
+                                  std::to_string(pressure.at("min_iterations").as_int()) + " is more than pressure.max_iterations (" +
+                                  std::to_string(pressure.at("max_iterations").as_int()) +
+                                  "); allowed: at most pressure.max_iterations");
     if (model == "pcisph" && pressure.at("kernel_correction").as_bool())
         errors.add(&pressure, "key '" + key(path, "pressure.kernel_correction") +
                                   "': corrects the pressure term of standard SPH and WCSPH; PCISPH's pressure force is its own; "
@@ -140,15 +167,23 @@ void check_combinations(const Value& fluid, const std::string& path, Errors& err
     // A fluid particle by a wall must find wall particles over its whole support, or its kernel sums are
     // cut there (the Gaussian's 3 h at h = 1.5 dp reaches 4.5 dp, past the default 3 layers).
     const auto layers = tank.at("wall_layers").as_int();
-    if (periodic != "xy" && static_cast<double>(layers) * num(fluid, "dp") < support * (1.0 - 1e-9))
+    const auto needed = static_cast<long long>(std::ceil(support / num(fluid, "dp") - 1e-9));
+    if (periodic != "xy" && needed > kMaxWallLayers)
+        errors.add(&fluid.at("h_over_dp"), "key '" + key(path, "h_over_dp") + "': the support radius (" + std::to_string(support) +
+                                               " m) needs " + std::to_string(needed) + " wall layers, more than the " +
+                                               std::to_string(kMaxWallLayers) + " allowed; allowed with kernel \"" +
+                                               fluid.at("kernel").as_string() + "\": h_over_dp <= " +
+                                               std::to_string(kMaxWallLayers / kernel_support_factor(fluid.at("kernel").as_string())));
+    else if (periodic != "xy" && static_cast<double>(layers) * num(fluid, "dp") < support * (1.0 - 1e-9))
         errors.add(&tank, "key '" + key(path, "tank.wall_layers") + "': " + std::to_string(layers) +
                               " layers of dp are thinner than the kernel's support radius (" + std::to_string(support) +
-                              " m); allowed: at least " + std::to_string(static_cast<long long>(std::ceil(support / num(fluid, "dp") - 1e-9))));
+                              " m); allowed: at least " + std::to_string(needed));
     if ((periodic == "y" || periodic == "xy") && tank.at("closed_top").as_bool())
         errors.add(&tank, "key '" + key(path, "tank.closed_top") + "': a tank periodic in y has no bottom or top wall");
     if (model == "wcsph" && pressure.at("c0").as_double() == 0.0 && pressure.at("u_max").as_double() == 0.0) {
         const auto g = fluid.at("gravity").as_doubles();
-        if (std::hypot(g[0], g[1]) == 0.0 || !fluid.find("water"))
+        const Value* water = fluid.find("water");
+        if (std::hypot(g[0], g[1]) == 0.0 || !water || water->as_array().empty())
             errors.add(&pressure, "key '" + key(path, "pressure.c0") +
                                       "': c0 cannot be estimated without gravity and water; set pressure.c0 or pressure.u_max");
     }
@@ -201,13 +236,15 @@ TableSchema build() {
         .fallback("wendland");
     s.number("rho0", "rest density").unit("kg/m^3").greater_than(0).fallback(1000.0);
     s.vector("gravity", 2, "body force per unit mass (also any imposed mean pressure gradient)").unit("m/s^2")
+        .at_least(-1e4).at_most(1e4)
         .fallback(Value(Value::Array{Value(0.0), Value(-9.81)}));
     s.choice("periodic", {"none", "x", "y", "xy"}, "periodic axes; the tank has no walls across a periodic axis")
         .fallback("none");
     s.integer("threads", "OpenMP threads; 0 = all cores the process may use (OMP_NUM_THREADS). Scenes under 4000 "
                          "particles run on one thread: thread synchronisation would cost more than it saves")
-        .at_least(0).fallback(0);
-    s.string("step_log", "file to append one line per time step to (step, t, dt, iterations, density error); "
+        .at_least(0).at_most(1024).fallback(0);
+    s.string("step_log", "file to append one line per time step to (step, t, dt, iterations, the largest density "
+                         "error of the window so far); "
                          "empty = no per-step log")
         .fallback("");
 
@@ -215,7 +252,7 @@ TableSchema build() {
     tank.number("width", "inner width").unit("m").greater_than(0).required();
     tank.number("height", "inner height (height of the side walls)").unit("m").greater_than(0).required();
     tank.integer("wall_layers", "layers of wall particles (the kernel support must fit: >= support radius / dp)")
-        .at_least(1).at_most(8).fallback(3);
+        .at_least(1).at_most(kMaxWallLayers).fallback(3);
     tank.boolean("closed_top", "put a wall (the lid) along the top too").fallback(false);
     tank.vector("lid_velocity", 2, "velocity of the lid, sliding in its plane (Couette flow)").unit("m/s")
         .fallback(Value(Value::Array{Value(0.0), Value(0.0)}));
@@ -225,7 +262,9 @@ TableSchema build() {
     water.number("y0", "bottom edge").unit("m").required();
     water.number("width", "width").unit("m").greater_than(0).required();
     water.number("height", "height").unit("m").greater_than(0).required();
-    water.integer("tag", "dye tag recorded for every particle of the block").fallback(0);
+    // Negative tags are the walls' and solids' in the record (-1, -2); a split block uses tag + 1 too.
+    water.integer("tag", "dye tag recorded for every particle of the block (negative tags mark walls and solids)")
+        .at_least(0).at_most(1e9).fallback(0);
     water.choice("split", {"none", "vertical", "horizontal"},
                  "dye the block's two halves differently: tag for the left/bottom half, tag + 1 for the other")
         .fallback("none");
@@ -257,8 +296,10 @@ TableSchema build() {
     pressure.number("c0", "WCSPH speed of sound; 0 = 10 u_max").unit("m/s").at_least(0).fallback(0.0);
     pressure.number("u_max", "expected largest flow speed for c0 = 10 u_max; 0 = sqrt(2 |g| H) with H the highest water top")
         .unit("m/s").at_least(0).fallback(0.0);
-    pressure.number("gamma", "Tait exponent").at_least(1).fallback(7.0);
-    pressure.number("background", "background pressure added to the equation of state").unit("Pa").fallback(0.0);
+    // Upper bounds far beyond any water model: 1e300 passed and the first step's acceleration was NaN.
+    pressure.number("gamma", "Tait exponent").at_least(1).at_most(20).fallback(7.0);
+    pressure.number("background", "background pressure added to the equation of state").unit("Pa")
+        .at_least(-1e9).at_most(1e9).fallback(0.0);
     pressure.boolean("clamp_negative",
                      "set negative fluid pressures to zero (stops free-surface particles from pulling together, "
                      "which summation densities would otherwise cause)")
@@ -270,9 +311,9 @@ TableSchema build() {
         .fallback(false);
     pressure.number("eta", "PCISPH: iterate until the largest density error is below eta * rho0")
         .greater_than(0).less_than(1).fallback(0.01);
-    pressure.integer("min_iterations", "PCISPH: fewest corrections per step").at_least(1).fallback(3);
-    pressure.integer("max_iterations", "PCISPH: most corrections before the step is halved and retried")
-        .at_least(3).fallback(50);
+    pressure.integer("min_iterations", "PCISPH: fewest corrections per step").at_least(1).at_most(1000).fallback(3);
+    pressure.integer("max_iterations", "PCISPH: most corrections before the step is halved and retried (at least min_iterations)")
+        .at_least(3).at_most(10000).fallback(50);
 
     TableSchema& density = s.table("density", "how densities are obtained");
     density.choice("method", {"summation", "shepard", "continuity"},

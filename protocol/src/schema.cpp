@@ -1,6 +1,8 @@
 #include "sphfsi/protocol/schema.hpp"
 
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <sstream>
 
 namespace sphfsi::schema {
@@ -35,6 +37,7 @@ std::string describe(const Value& v) {
 
 void Errors::add(const Value* at, std::string message) {
     if (at && at->line > 0) message = "line " + std::to_string(at->line) + ": " + message;
+    if (at && at->line == Value::kFromOverride) message = "--set: " + message;
     items.push_back(std::move(message));
 }
 
@@ -80,6 +83,10 @@ Value Field::validate(const Value& v, const std::string& path, Errors& errors) c
             return Value(v.as_double());  // ints are accepted where a float is wanted
         case Kind::Integer:
             if (!v.is_int()) return bad("got " + std::string(v.type_name()));
+            // The solvers read integer keys into 32-bit ints: a larger value would wrap silently (2^32 + 1
+            // read as 1), whatever range the key itself allows.
+            if (v.as_int() < std::numeric_limits<std::int32_t>::min() || v.as_int() > std::numeric_limits<std::int32_t>::max())
+                return bad("got " + describe(v) + ", beyond the 32-bit range every integer key is read into");
             if (!in_range(static_cast<double>(v.as_int()))) return bad("got " + describe(v));
             return v;
         case Kind::Boolean:

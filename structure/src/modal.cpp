@@ -91,7 +91,11 @@ Modes dense_modes(const Model& model, const SparseMatrix& K, const SparseMatrix&
     const SparseMatrix Mr = model.T.transpose() * M * model.T;
     const Eigen::MatrixXd Kd(Kr), Md(Mr);
     Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(Kd, Md);
-    if (es.info() != Eigen::Success) throw protocol::SolverError("internal", "structure: modal analysis failed");
+    // Within the schema's bounds only an extreme combination of them fails here; name what sets K and M.
+    if (es.info() != Eigen::Success)
+        throw protocol::SolverError("bad_config", "structure: the modal analysis did not converge; check "
+                                                  "structure.material.E and rho, structure.section.thickness and depth, "
+                                                  "and the members' lengths and n_elements for extreme values");
     Modes modes;
     modes.omega2 = es.eigenvalues();
     modes.shapes = model.T * es.eigenvectors();

@@ -147,6 +147,22 @@ void check_structure(const Value& s, const std::string& path, Errors& errors) {
         }
     }
 
+    // Collinear members over a shared stretch are not joined there (only ends meet nodes): each would carry
+    // its own stiffness and mass, a silently doubled structure.
+    for (std::size_t i = 0; i < members.size(); ++i)
+        for (std::size_t j = 0; j < i; ++j) {
+            const auto& m = members[j];
+            const double L = m.length(), ex = (m.b.x - m.a.x) / L, ey = (m.b.y - m.a.y) / L;
+            auto along = [&](Point p) { return (p.x - m.a.x) * ex + (p.y - m.a.y) * ey; };
+            auto off = [&](Point p) { return std::abs(-(p.x - m.a.x) * ey + (p.y - m.a.y) * ex); };
+            if (off(members[i].a) > tol || off(members[i].b) > tol) continue;
+            const double lo = std::min(along(members[i].a), along(members[i].b)),
+                         hi = std::max(along(members[i].a), along(members[i].b));
+            if (std::min(hi, L) - std::max(lo, 0.0) > tol)
+                errors.add(&s, "key '" + path + ".members[" + std::to_string(i) + "]': lies along members[" +
+                                   std::to_string(j) + "] over a common stretch; members may meet at nodes but not overlap");
+        }
+
     check_points_on_nodes(s.find("supports"), path + ".supports", members, tol, errors);
     check_points_on_nodes(s.find("point_loads"), path + ".point_loads", members, tol, errors);
     if (const Value* init = s.find("initial"))
@@ -177,9 +193,25 @@ void check_structure(const Value& s, const std::string& path, Errors& errors) {
 
     if (const Value* init = s.find("initial")) {
         bool statics = init->at("static_equilibrium").as_bool() || init->contains("preload");
-        if (statics && init->at("mode").as_int() > 0)
+        const auto mode = init->at("mode").as_int();
+        if (statics && mode > 0)
             errors.add(init, "key '" + path + ".initial': a mode-shape start (mode > 0) and a static start "
                              "(static_equilibrium / preload) exclude each other; choose one");
+        // Three DOF a node bound the modes; joints and supports take some, which INIT then reports exactly.
+        long long nodes = 0;
+        for (const auto& m : members) nodes += m.n + 1;
+        if (mode > 3 * nodes)
+            errors.add(&init->at("mode"), "key '" + path + ".initial.mode': " + std::to_string(mode) + " but the structure has " +
+                                              std::to_string(nodes) + " nodes at most, so at most " +
+                                              std::to_string(3 * nodes) + " modes; allowed: at most " + std::to_string(3 * nodes));
+        // Either half of a mode start alone does nothing, which is never what was meant.
+        const bool amplitude = init->at("mode_amplitude").as_double() != 0.0;
+        if (mode > 0 && !amplitude)
+            errors.add(init, "key '" + path + ".initial.mode_amplitude': a mode start (mode = " + std::to_string(mode) +
+                                 ") needs a non-zero mode_amplitude");
+        if (mode == 0 && amplitude)
+            errors.add(&init->at("mode_amplitude"), "key '" + path + ".initial.mode_amplitude': set without initial.mode; "
+                                                    "allowed with mode = 0: 0");
     }
 }
 
@@ -209,16 +241,19 @@ TableSchema build() {
         .fallback(Value::Array{0.0, -9.81});
 
     auto& mat = s.table("material", "Linear elastic isotropic material.", true);
-    mat.number("E", "Young's modulus").unit("Pa").greater_than(0).required();
+    // Material and section bounds far beyond any real structure (the stiffest solids are near 1e12 Pa, the
+    // densest near 2.3e4 kg/m^3; the added-mass sweep goes down to 0.3): 1e308 Pa or 1e-300 kg/m^3 passed and
+    // broke the modal analysis, with no key named.
+    mat.number("E", "Young's modulus").unit("Pa").at_least(1.0).at_most(1e13).required();
     mat.number("nu", "Poisson's ratio; used only when section.plane_strain = true").at_least(0).less_than(0.5)
         .fallback(0.3);
-    mat.number("rho", "density").unit("kg/m^3").greater_than(0).required();
+    mat.number("rho", "density").unit("kg/m^3").at_least(1e-3).at_most(1e6).required();
 
     auto& sec = s.table("section", "Solid rectangular cross-section: A = b t, I = b t^3 / 12.", true);
     sec.number("thickness", "in-plane thickness t (also the distance between the two wetted faces)").unit("m")
-        .greater_than(0).required();
+        .greater_than(0).at_most(1e3).required();
     sec.number("depth", "out-of-plane depth b; the fluid is 2D per metre of depth, keep 1 unless you mean it")
-        .unit("m").greater_than(0).fallback(1.0);
+        .unit("m").greater_than(0).at_most(1e3).fallback(1.0);
     sec.boolean("plane_strain",
                 "use E / (1 - nu^2): a plate strip in cylindrical bending (a gate spanning the whole channel)")
         .fallback(false);
@@ -277,7 +312,7 @@ TableSchema build() {
         .less_than(1).fallback(Value::Array{0.02, 0.02});
     damp.vector("frequencies", 2,
                 "rayleigh: the two frequencies f1 < f2; absent = the 1st and the time.resolved_modes-th "
-                "natural frequency")
+                "natural frequency (the 2nd when resolved_modes = 1)")
         .unit("Hz").greater_than(0);
     damp.check([](const Value& t, const std::string& path, Errors& errors) {
         if (const Value* f = t.find("frequencies")) {

@@ -75,5 +75,69 @@ def test_missing_file_is_named():
     assert code == 2 and "is a directory, not a scene file" in text, text
 
 
+# Each was found by a review (2026-11-27) to pass `check` and then fail only after the participants had started,
+# or to run silently wrong; each set of overrides on a valid scene must now be refused by `check`, naming the key.
+MISTAKES_FOUND_LATE = [
+    ("elastic_gate", ["watchpoint[0].x=3.0"], "key 'watchpoint[0]': (3, 0) m lies 2.895 m from the wetted structure"),
+    ("elastic_gate", ["fluid.gate={x0=0.3, lift_speed=1.0}"], "key 'fluid.gate': a scene with a gate cannot also couple"),
+    ("elastic_gate", ["structure.members[0].wetted=false", "watchpoint=[]"],
+     "key 'structure.members': a coupled scene needs at least one member with wetted = true"),
+    ("elastic_gate", ["structure.members[0].start=[5.1025,0.079]", "structure.members[0].end=[5.1025,0.0]",
+                      "structure.supports[0].at=[5.1025,0.079]", "watchpoint=[]"],
+     "key 'structure.members[0]': its wetted cross-section reaches"),
+    ("beam_only", ["structure.initial.mode=1000", "structure.initial.mode_amplitude=0.01"],
+     "key 'structure.initial.mode': 1000 but the structure has 21 nodes at most"),
+    ("beam_only", ["structure.initial.mode=4294967297", "structure.initial.mode_amplitude=0.01"],
+     "beyond the 32-bit range every integer key is read into"),
+    ("beam_only", ["structure.initial.mode_amplitude=0.01"], "key 'structure.initial.mode_amplitude': set without"),
+    ("beam_only", ['watchpoint[0].name="a,b"'], "key 'watchpoint[0].name': got \"a,b\""),
+    ("beam_only", ["structure.members[0].wetted=false", "load.force=[0.0,-100.0]"],
+     "[load] is spread over the wetted interface, and no structure.members[] is wetted"),
+    ("beam_only", ["structure.members=[{start=[0.0,0.0],end=[1.0,0.0],n_elements=20},"
+                   "{start=[0.0,0.0],end=[1.0,0.0],n_elements=20}]"],
+     "key 'structure.members[1]': lies along members[0] over a common stretch"),
+    ("beam_only", ["structure.material.E=1e308"], "key 'structure.material.E': got 1e+308"),
+    ("dam_break", ["fluid.pressure.model=pcisph", "fluid.density.method=summation",
+                   "fluid.pressure.min_iterations=10", "fluid.pressure.max_iterations=5"],
+     "key 'fluid.pressure.min_iterations': 10 is more than pressure.max_iterations (5)"),
+    ("dam_break", ["fluid.water=[{x0=0.0,y0=0.0,width=0.1,height=0.1},{x0=0.05,y0=0.0,width=0.1,height=0.1}]"],
+     "key 'fluid.water[1]': overlaps water[0]"),
+    ("dam_break", ["fluid.water=[]", "fluid.pressure.c0=0"], "key 'fluid.pressure.c0': c0 cannot be estimated"),
+    ("dam_break", ["fluid.dp=1e300", "fluid.pressure.c0=10"], "key 'fluid.dp': 1e+300 m is more than the tank's"),
+    ("dam_break", ["fluid.kernel=gaussian", "fluid.h_over_dp=3"], "allowed with kernel \"gaussian\": h_over_dp <= 2.66"),
+    ("dam_break", ["fluid.pressure.gamma=1e300"], "key 'fluid.pressure.gamma': got 1e+300"),
+    ("dam_break", ["fluid.tank={width=-1.0, height=0.5}"], "--set: key 'fluid.tank.width': got -1"),
+    ("elastic_gate", ['participants.structure=" "'], "key 'participants.structure': empty"),
+]
+
+
+def test_rules_that_join_sections_are_checked_before_anything_starts():
+    for scene, sets, expected in MISTAKES_FOUND_LATE:
+        path = os.path.join(harness.ROOT, "scenarios", scene + ".toml")
+        assert harness.sphfsi("check", path)[0] == 0, scene
+        code, text = harness.sphfsi("check", path, *[a for s in sets for a in ("--set", s)])
+        assert code == 2 and expected in text, (sets, expected, text)
+
+
+def test_a_coupled_scene_may_leave_coupling_out():
+    """Every coupling key has a default; before 2026-11-27 a scene without [coupling] passed check and then
+    stopped after both participants had started ("missing key 'coupling'")."""
+    source = os.path.join(harness.ROOT, "scenarios", "elastic_gate.toml")
+    with open(source) as f:
+        lines = f.read().split("\n")
+    start = lines.index("[coupling]")
+    end = next(i for i in range(start + 1, len(lines)) if lines[i].startswith("["))
+    folder = harness.out_dir("no-coupling")
+    scene = os.path.join(folder, "scene.toml")
+    with open(scene, "w") as f:
+        f.write("\n".join(lines[:start] + lines[end:]))
+    out = os.path.join(folder, "out")
+    code, text = harness.sphfsi("run", scene, "--out", out, "--quiet", "--set", "fluid.dp=0.005",
+                                "--set", "run.end_time=0.002", timeout=120)
+    assert code == 0, text
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert f.attrs["status"] == "completed"
+
+
 if __name__ == "__main__":
     harness.main(globals())

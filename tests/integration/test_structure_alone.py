@@ -102,7 +102,8 @@ def test_check_validates_without_running():
 def test_a_structure_with_nothing_wetted_runs_alone():
     """A structure alone may publish no interface (no wetted member): the run records an empty mesh and no
     interface rows. Before 2026-11-27 HDF5 refused to chunk the empty mesh and the run failed at its start
-    ("cannot create dataset /interface/vertices"). A watchpoint needs a wetted surface and says so."""
+    ("cannot create dataset /interface/vertices"). A watchpoint needs a wetted surface, which the scene check
+    says before anything starts (before 2026-11-27 the structure was started first)."""
     scene = os.path.join(harness.ROOT, "scenarios", "beam_only.toml")
     dry = ["--set", "structure.members[0].wetted=false", "--set", "run.end_time=0.1"]
     out = harness.out_dir("nothing-wetted")
@@ -112,9 +113,10 @@ def test_a_structure_with_nothing_wetted_runs_alone():
         assert f.attrs["status"] == "completed"
         assert f["interface/vertices"].shape == (0, 2) and f["interface/cells"].shape == (0, 4)
         assert f["windows/t"].shape[0] == 10 and f["frames/structure/displacement"].shape[0] == 11
-    code, text = harness.sphfsi("run", scene, "--out", harness.out_dir("nothing-wetted-watched"), "--quiet", *dry,
-                                timeout=60)
-    assert code != 0 and "watchpoint 'tip': the structure publishes no interface cells" in text, text
+    watched = harness.out_dir("nothing-wetted-watched")
+    code, text = harness.sphfsi("run", scene, "--out", watched, "--quiet", *dry, timeout=60)
+    assert code != 0 and "key 'watchpoint[0]': watchpoints follow the wetted interface" in text, text
+    assert "connected" not in text and not os.path.exists(os.path.join(watched, "record.h5")), text
 
 
 if __name__ == "__main__":

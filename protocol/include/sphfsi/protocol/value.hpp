@@ -65,7 +65,9 @@ public:
     const char* type_name() const;
     const Data& data() const { return data_; }
 
-    // 1-based line in the scene file this value came from; 0 when unknown (e.g. received over the wire).
+    // 1-based line in the scene file this value came from; 0 when unknown (e.g. received over the wire);
+    // kFromOverride when a --set on the command line gave it.
+    static constexpr int kFromOverride = -1;
     int line = 0;
 
 private:
