@@ -48,7 +48,7 @@ def fluid_rows(bin_dir, model, sizes, threads, steps, repeats):
     rows = []
     for size in sizes:
         for t in threads:
-            rates, rss, last = [], [], None
+            rates, rss, walls, last = [], [], [], None
             for _ in range(repeats):
                 out, usage = run_measured([os.path.join(bin_dir, "sphfsi-fluid-bench"), "--sizes", size, "--threads", str(t),
                                            "--models", model, "--steps", str(steps)])
@@ -56,8 +56,9 @@ def fluid_rows(bin_dir, model, sizes, threads, steps, repeats):
                 # model threads fluid particles steps iters wall_s rate bytes/part peak_rss/part
                 last = line
                 rates.append(float(line[7]))
+                walls.append(float(line[6]))
                 rss.append(float(line[9]))  # the bench's own VmHWM per particle (wait4's carries Python's)
-            rows.append((model, t, int(last[3]), int(last[4]), float(last[6]), statistics.median(rates), min(rates),
+            rows.append((model, t, int(last[3]), int(last[4]), statistics.median(walls), statistics.median(rates), min(rates),
                          max(rates), statistics.median(rss)))
     return rows
 

@@ -117,7 +117,8 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
     for col in [x, y] + list(series) + ([annotate] if annotate else []):
         if col not in have:
             raise ChartError(f"no column {col!r}; columns: {', '.join(rows[0])}")
-    groups, failed, no_error = {}, [], []
+    groups, failed, no_value, no_error, not_applicable = {}, [], [], [], 0
+    metric_label = y.split(".", 1)[0]
     for r in rows:
         label = series_label(r, series)
         cx, cy = results.number(r[x]), results.number(r[y])
@@ -125,8 +126,15 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
             failed.append((label, cx, r))
         elif not (cx > 0 and math.isfinite(cx)):
             failed.append((label, cx, dict(r, status="no cost")))
-        elif not str(r[y]).strip():  # completed, but its metric gave no value (the sweep's CSV says why)
-            failed.append((label, cx, dict(r, status="no value")))
+        elif not str(r[y]).strip():
+            # Completed with an empty cell: the metric failed when the notes say why; the reference run gets no
+            # value from a metric against itself; a run the metric's `where` leaves out has nothing to draw.
+            if any(n.startswith(metric_label + ": ") for n in str(r.get("notes") or "").split("; ")):
+                no_value.append((label, cx, dict(r, status="no value")))
+            elif r.get("run") and r.get("run") == desc.get("reference_run"):
+                no_error.append((label, cx, r))
+            else:
+                not_applicable += 1
         elif not (cy > 0 and math.isfinite(cy)):
             no_error.append((label, cx, r))
         else:
@@ -135,7 +143,7 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
     fig, ax = plt.subplots(figsize=(9, 6))
     ax.set_xscale("log")
     ax.set_yscale("log")
-    labels = sorted(set(groups) | {l for l, _, _ in failed} | {l for l, _, _ in no_error})
+    labels = sorted(set(groups) | {l for l, _, _ in failed + no_value + no_error})
     colours = {l: f"C{i % 10}" for i, l in enumerate(labels)}
     markers = {l: MARKERS[i % len(MARKERS)] for i, l in enumerate(labels)}
     all_pts = []
@@ -163,7 +171,7 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
                 label=f"Pareto front ({len(front)} of {len(all_pts)} runs)")
 
     # Axis limits from everything that has a cost, so crosses of failed runs fall inside.
-    xs = [p[0] for p in all_pts] + [c for _, c, _ in failed + no_error if c > 0 and math.isfinite(c)]
+    xs = [p[0] for p in all_pts] + [c for _, c, _ in failed + no_value + no_error if c > 0 and math.isfinite(c)]
     ys = [p[1] for p in all_pts]
     if xs:
         lo, hi = min(xs), max(xs)
@@ -178,11 +186,12 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
     def at_x(c):
         return c if c > 0 and math.isfinite(c) else xlo * 1.08
 
-    if failed:
-        for i, (label, c, r) in enumerate(failed):
+    crosses = failed + no_value
+    if crosses:
+        for i, (label, c, r) in enumerate(crosses):
             ax.plot([at_x(c)], [0.965], "x", color=colours.get(label, "r"), ms=10, mew=2.2, transform=edge,
                     clip_on=False, zorder=5, label="did not complete, or no value" if i == 0 else None)
-            if len(failed) <= 24:
+            if len(crosses) <= 24:
                 ax.annotate(f"{r.get('status')}: {r.get('case') or label}", (at_x(c), 0.935), xycoords=edge, rotation=90,
                             fontsize=6.5, ha="center", va="top", color=colours.get(label, "r"))
         ax.axhspan(0.9, 1.0, transform=ax.transAxes, color="r", alpha=0.05, zorder=0)
@@ -193,7 +202,8 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
     ax.set_xlabel(axis_label(x, desc))
     ax.set_ylabel(axis_label(y, desc))
     ttl = title or desc.get("title") or "error against cost"
-    counts = f"{len(all_pts)} plotted, {len(failed)} did not complete, {len(no_error)} without error"
+    counts = f"{len(all_pts)} plotted, {len(failed)} did not complete, {len(no_value)} no value, " \
+             f"{len(no_error)} without error" + (f", {not_applicable} not applicable" if not_applicable else "")
     ax.set_title(f"{ttl}\n{y} against {x} ({counts})", fontsize=10)
     ax.grid(True, which="both", alpha=0.25)
     ax.legend(fontsize=7.5, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
@@ -204,7 +214,7 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
     fig.savefig(prefix + ".svg")
     plt.close(fig)
     return {"plotted": len(all_pts), "series": len([l for l in labels if groups.get(l)]), "failed": len(failed),
-            "no_error": len(no_error),
+            "no_value": len(no_value), "no_error": len(no_error), "not_applicable": not_applicable,
             "pareto": [(p[2], p[0], p[1], p[3].get("run", "")) for p in front]}
 
 
@@ -243,8 +253,8 @@ def chart_file(csv_path, x, y, series, prefix, title=None, annotate=None, where=
     if series is None:
         series = default_series(rows, desc)
     s = make_chart(rows, x, y, series, prefix, title, annotate, desc)
-    return (f"{s['plotted']} runs in {s['series']} series, {s['failed']} did not complete, "
-            f"{s['no_error']} without error, Pareto front {len(s['pareto'])}")
+    return (f"{s['plotted']} runs in {s['series']} series, {s['failed']} did not complete, {s['no_value']} no value, "
+            f"{s['no_error']} without error, {s['not_applicable']} not applicable, Pareto front {len(s['pareto'])}")
 
 
 def threshold_chart(rows, key, prefix, title=None, log=True, probes=None, bracket=None):

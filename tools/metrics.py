@@ -325,8 +325,9 @@ def participant_info(run_dir, params, context):
         {"value": ("the reduced /windows column", "as the column")}, ("value",))
 def window_stat(run_dir, params, context):
     """A reduction (sum, max, min, mean, last) of one /windows column, e.g. the largest coupling
-    residual or the mean number of coupling iterations; `absolute` takes |x| first; windows ending before
-    t_start or after t_end are left out. value = reduce(x over windows)."""
+    residual or the mean number of coupling iterations; `absolute` takes |x| first; windows ending at or
+    before t_start (they lie wholly before it) or after t_end are left out; both bounds allow a relative
+    1e-12 for round-off in the recorded times. value = reduce(x over windows)."""
     with open_record(run_dir) as f:
         w = f.get("windows")
         if w is None or params["column"] not in w:
@@ -335,7 +336,7 @@ def window_stat(run_dir, params, context):
         t = w["t"][:]
     keep = np.ones(x.shape, dtype=bool)
     if params.get("t_start") is not None:
-        keep &= t >= float(params["t_start"])
+        keep &= t > float(params["t_start"]) * (1 + 1e-12)
     if params.get("t_end") is not None:
         keep &= t <= float(params["t_end"]) * (1 + 1e-12)
     x = x[keep]
@@ -366,7 +367,7 @@ def max_density_error(run_dir, params, context):
     DENSITY_WINDOW_COLUMNS: every sub-step is seen; mode does not apply, the participant's definition
     does); "frames": from /frames/fluid/density of fluid particles (kind == 0) at the recorded frames
     only; "auto": windows if present, else frames. rho0: the param, else the fluid's READY info `rho0`,
-    else 1000 kg/m^3. Windows/frames ending before t_start are left out.
+    else 1000 kg/m^3. Windows ending at or before t_start (as in window_stat) and frames before it are left out.
         max = max over time of max_i e_i,   mean = mean over windows/frames of max_i e_i
     """
     t_start = params.get("t_start")
@@ -382,7 +383,7 @@ def max_density_error(run_dir, params, context):
         if col is not None and params["source"] != "frames":
             per = np.abs(w[col][:])
             if t_start is not None:
-                per = per[w["t"][:] >= float(t_start)]
+                per = per[w["t"][:] > float(t_start) * (1 + 1e-12)]
         else:
             g = f.get("frames/fluid")
             if g is None or "density" not in g or "kind" not in g:

@@ -1,7 +1,7 @@
 #!/usr/bin/env -S /usr/bin/python3
 """Plots watchpoints.csv (time, name, x, y, dx, dy): the displacement of each named structure point.
 
-usage: /usr/bin/python3 tools/plot_watchpoints.py RUN/watchpoints.csv [OUT.png] [--ref NAME.dx=FILE.csv ...]
+usage: /usr/bin/python3 tools/plot_watchpoints.py RUN/watchpoints.csv [OUT.png] [--ref "NAME dx=FILE.csv" ...]
 
 --ref overlays reference points (a CSV with '#' comment lines and two columns: t and the component,
 e.g. scenarios/reference/antoci2007_gate_tip_dx.csv) on the named watchpoint's component.

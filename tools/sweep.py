@@ -119,9 +119,15 @@ class Sweeper:
         if data.get("id") != run.id or data.get("scene_sha") != self.sw.scene_sha \
                 or data.get("set_args") != run.set_args() or data.get("row", {}).get("status") == "interrupted":
             return None
+        # A run that timed out under a shorter limit than today's may complete now (a missing limit: older file).
+        if data["row"].get("status") == "timeout" and self.timeout_of(run) > data.get("timeout_s", math.inf):
+            return None
         if reusing and data.get("build") != self.build_stamp:
             self.reused_other_build = True
         return data["row"]
+
+    def timeout_of(self, run):
+        return run.timeout_s if run.timeout_s is not None else self.sw.timeout_s
 
     def execute(self, run):
         """Runs one coordinator (or reuses its earlier result under --resume); returns its row."""
@@ -136,14 +142,14 @@ class Sweeper:
         d = self.run_dir(run)
         if os.path.isdir(d):
             shutil.rmtree(d)
-        timeout = run.timeout_s if run.timeout_s is not None else self.sw.timeout_s
+        timeout = self.timeout_of(run)
         rr = runner.run_coordinator(self.sphfsi, self.sw.scene, d, run.set_args(), timeout, self.sw.grace_s,
                                     self.env, self.stop)
         with self.metric_lock:
             row = record.summarize(d, rr, timeout)
         results.write_json(os.path.join(d, "result.json"), {
             "id": run.id, "scene": self.sw.scene, "scene_sha": self.sw.scene_sha, "set_args": run.set_args(),
-            "build": self.build_stamp, "threads": self.threads,
+            "build": self.build_stamp, "threads": self.threads, "timeout_s": timeout,
             "finished": datetime.datetime.now().isoformat(timespec="seconds"), "row": row})
         return row
 
@@ -272,6 +278,7 @@ def write_description(sweeper, started, extra=None):
         "axes": [{"name": a.name, "values": [lbl for lbl, _ in a.values] if a.bundles
                   else [specs.toml_value(v) for v in a.values]} for a in sw.axes],
         "setting_columns": sw.setting_columns,
+        "reference_run": next((r.id for r in sw.runs if r.reference), None),
         "metrics": sw.metrics,
         "columns": describe_columns(sweeper),
         "chart": sw.chart,
@@ -307,9 +314,19 @@ def run_bisection(sweeper, selected):
     sw = sweeper.sw
     cfg = sw.bisect
     key = cfg["key"]
+    fail_if = cfg["fail_if"]
+    # A metric against the reference run needs that run: it is run (or reused) first, is not itself a target,
+    # and every probe's metrics see it (before 2026-11-27 each probe saw only itself, so such a fail_if
+    # failed every probe with "no reference run").
+    reference = next((r for r in sw.runs if r.reference), None)
+    reference_rows = {}
+    if reference is not None and any(metrics.METRICS[m["name"]].uses_reference for m in sw.metrics):
+        selected = [t for t in selected if t is not reference]
+        print(f"bisection: the reference run {reference.label() or reference.id} first", flush=True)
+        reference_rows[reference.id] = sweeper.execute(reference)
+        print(f"[{reference.label() or 'reference'}] {reference_rows[reference.id].get('status')}", flush=True)
     probes = {r.id: [] for r in selected}
     summaries = {}
-    fail_if = cfg["fail_if"]
     print(f"bisection on {key} in [{cfg['low']}, {cfg['high']}] ({cfg['scale']}"
           f"{', integer' if cfg['integer'] else ''}), rel_tol {cfg['rel_tol']}, at most {cfg['max_runs']} runs "
           f"each ({bisection.bound_on_runs(cfg['low'], cfg['high'], cfg['scale'], cfg['integer'], cfg['rel_tol'], cfg['confirm'])}"
@@ -322,10 +339,10 @@ def run_bisection(sweeper, selected):
             settings = dict(target.settings)
             settings[key] = value
             slug = ([("case", target.case)] if target.case else list(target.slug_items)) + [(key, value)]
-            prun = specs.Run(overrides, settings, slug_items=slug)
+            prun = specs.Run(overrides, settings, slug_items=slug, timeout_s=target.timeout_s)
             prun.case = target.case
             row = sweeper.execute(prun)
-            infos = sweeper.infos({prun.id: row}, [prun])
+            infos = sweeper.infos({prun.id: row, **reference_rows}, [prun] + ([reference] if reference_rows else []))
             sweeper.compute_metrics(prun, row, infos, "all")
             passed = row.get("status") == "completed"
             why = row.get("message") or ""

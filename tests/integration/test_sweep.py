@@ -258,14 +258,34 @@ def test_charts_are_written():
 def test_chart_names_a_completed_run_whose_metric_has_no_value():
     """A run that completed but whose metric could not be computed (an empty cell in results.csv) is drawn
     and counted apart from the plotted points, as not having a value; it was once drawn as a run with no
-    positive error, which reads as exact."""
+    positive error, which reads as exact. An empty cell the notes do not explain is the reference run's (a
+    metric against itself: drawn as a reference) or a run the metric's `where` leaves out (not drawn); both were
+    once drawn and counted as runs that did not complete."""
     rows = [{"status": "completed", "cpu_s": "1.0", "err": "0.1", "m": "a"},
             {"status": "completed", "cpu_s": "2.0", "err": "0.05", "m": "a"},
-            {"status": "completed", "cpu_s": "3.0", "err": "", "m": "a"},
-            {"status": "completed", "cpu_s": "4.0", "err": "0", "m": "a"}]
+            {"status": "completed", "cpu_s": "3.0", "err": "", "m": "a", "notes": "err: the frames reach T = 1"},
+            {"status": "completed", "cpu_s": "4.0", "err": "0", "m": "a"},
+            {"status": "completed", "cpu_s": "5.0", "err": "", "m": "a", "run": "finest"},
+            {"status": "completed", "cpu_s": "6.0", "err": "", "m": "a", "notes": "other: no data"},
+            {"status": "failed", "cpu_s": "7.0", "err": "", "m": "a"}]
     prefix = os.path.join(harness.out_dir("chart-no-value"), "chart")
-    summary = chart.make_chart(rows, "cpu_s", "err", ["m"], prefix)
-    assert (summary["plotted"], summary["failed"], summary["no_error"]) == (2, 1, 1), summary
+    summary = chart.make_chart(rows, "cpu_s", "err", ["m"], prefix, desc={"reference_run": "finest"})
+    got = tuple(summary[k] for k in ("plotted", "failed", "no_value", "no_error", "not_applicable"))
+    assert got == (2, 1, 1, 2, 1), summary
+
+
+def test_print_expect_keeps_each_expectations_own_tolerances():
+    """--print-expect writes the measured values to paste back into the sweep file; before 2026-11-27 it
+    wrote bare numbers, dropping a recorded atol, tolerance or two_sided (the next --check then failed on
+    round-off), and left out integer quantities."""
+    from sweeplib import expect as guard
+    run = specs.Run({"k": 1}, {}, case="c", expect={"status": "completed", "a.rel": {"value": 1e-12, "atol": 1e-9},
+                                                      "b.frac": {"value": 1.0, "two_sided": True},
+                                                      "c.n": {"value": 4.0}})
+    text = guard.expect_toml([run], {run.id: {"status": "completed", "a.rel": 2e-12, "b.frac": 0.5, "c.n": 5}},
+                             [], "today")
+    assert '"a.rel" = { value = 2e-12, atol = ' + specs.toml_value(1e-9) + ' }' in text, text
+    assert '"b.frac" = { value = 0.5, two_sided = true }' in text and '"c.n" = 5' in text, text
 
 
 FAKE_COORDINATOR = r'''

@@ -80,8 +80,14 @@ def expect_toml(runs, rows_by_id, error_columns, when):
         keys = [k for k in run.expect if k != "status"] or error_columns
         for k in keys:
             v = row.get(k)
-            if isinstance(v, float) and not math.isnan(v):
-                out.append(f'"{k}" = {v:.4g}')
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or math.isnan(v):
+                continue
+            value = f"{v:.4g}" if isinstance(v, float) else str(v)
+            # A recorded expectation's own tolerance, atol and two_sided stay with its new value.
+            extra = {kk: vv for kk, vv in run.expect.get(k, {}).items() if kk != "value"}
+            if extra:
+                value = "{ value = " + value + "".join(f", {kk} = {toml_value(vv)}" for kk, vv in extra.items()) + " }"
+            out.append(f'"{k}" = {value}')
     return "\n".join(out) + "\n"
 
 

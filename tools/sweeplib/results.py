@@ -14,7 +14,8 @@ RUN_COLUMNS = {
     "exit_code": ("the coordinator's exit status (0, 1, 2, 130; -N: killed by signal N)", ""),
     "wall_s": ("wall-clock time of the run, start of the coordinator to its exit", "s"),
     "cpu_s": ("CPU time of the coordinator and its participants (user + system)", "s"),
-    "record_wall_s": ("the coordinator's own wall time of the coupled run (record attribute wall_s)", "s"),
+    "record_wall_s": ("the coupling windows' wall time summed, recording and snapshots left out (record attribute "
+                      "wall_s)", "s"),
     "t_end": ("simulated time reached (end of the last window)", "s"),
     "windows": ("coupling windows taken", ""),
     "coupling_iterations": ("sum over windows of coupling iterations", ""),
@@ -34,7 +35,7 @@ RUN_COLUMNS = {
 COST_LABELS = {
     "wall_s": "wall-clock time [s]",
     "cpu_s": "CPU time, coordinator + participants [s]",
-    "record_wall_s": "coupled-run wall time [s]",
+    "record_wall_s": "wall time of the coupling windows [s]",
     "particle_steps": "particle-steps (fluid particles x fluid sub-steps)",
     "element_steps": "element-steps (beam elements x structure sub-steps)",
     "coupling_iterations": "coupling iterations (sum over windows)",

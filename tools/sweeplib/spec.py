@@ -163,7 +163,7 @@ def load(path):
         sets = c.get("set", {})
         if not isinstance(sets, dict):
             fail(f"{what}: set must be a table of scene key = value")
-        overrides, labels = {}, {}
+        overrides, labels, explicit = {}, {}, {}
         for k, v in _flatten(sets, f"{what} set", fail).items():
             if k in bundle_axes:
                 if v not in bundle_axes[k]:
@@ -172,7 +172,10 @@ def load(path):
                 overrides.update(bundle_axes[k][v])
             else:
                 _check_scene_value(k, v, f"{what} set", fail)
-                overrides[k] = v
+                explicit[k] = v
+        # A case's own keys win over its bundles' whatever order the table lists them in (a bundle named after
+        # a key used to overwrite it, and the case could then merge silently into a grid run).
+        overrides.update(explicit)
         timeout = c.get("timeout_s")
         if timeout is not None:
             timeout = _positive(timeout, f"{what} timeout_s", fail)
