@@ -11,6 +11,9 @@ using Clock = std::chrono::steady_clock;
 volatile std::sig_atomic_t g_interrupted = 0;
 
 namespace {
+// The largest first message taken from an unknown connection (docs/protocol.md, "Limits"): a HELLO is
+// under 1 KiB.
+constexpr std::size_t kLargestStrangerMessage = 64 * 1024;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 ParticipantFailure reported(const std::string& role, const ErrorReply& e) {
     return ParticipantFailure(role, e.code, "reported " + printable(e.code) + ": " + printable(e.message, 2000));
@@ -225,9 +228,13 @@ void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) 
         e.version = their_version;
         send_raw(id, e, true);
     };
+    // A stranger's first words are a HELLO, well under 1 KiB; anything much larger is refused unread, so that
+    // a local process without the token cannot keep this thread (and the heartbeats) busy decoding.
+    DecodeLimits stranger_limits;
+    stranger_limits.max_bytes = kLargestStrangerMessage;
     Message m;
     try {
-        m = decode(payload.data(), payload.size());
+        m = decode(payload.data(), payload.size(), stranger_limits);
     } catch (const ProtocolError& e) {
         if (!e.answerable()) return log_("ignored a malformed " + e.type_name() + " from an unknown connection");
         return refuse(e.seq(), e.code(), std::string("malformed first message: ") + e.what());
@@ -245,11 +252,11 @@ void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) 
     std::uint32_t lo = std::max(h.version_min, kOldestSupportedVersion), hi = std::min(h.version_max, kProtocolVersion);
     if (lo > hi)
         return refuse(m.seq, "version_mismatch",
-                      "participant '" + h.name + "' speaks protocol " + std::to_string(h.version_min) + ".." +
+                      "participant '" + printable(h.name) + "' speaks protocol " + std::to_string(h.version_min) + ".." +
                           std::to_string(h.version_max) + ", the coordinator " + std::to_string(kOldestSupportedVersion) +
                           ".." + std::to_string(kProtocolVersion));
     if (std::find(expected_.begin(), expected_.end(), h.name) == expected_.end())
-        return refuse(m.seq, "refused", "the scene has no participant named '" + h.name + "'");
+        return refuse(m.seq, "refused", "the scene has no participant named '" + printable(h.name) + "'");
     if (peers_.count(h.name)) return refuse(m.seq, "refused", "'" + h.name + "' is already connected");
     // A role is what the scene needs and the kind what the program is; the roles are named after the kinds.
     if (h.kind != h.name)
@@ -266,7 +273,7 @@ void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) 
     Message w = make_message(MessageType::Welcome, m.seq, token_, Welcome{hi, timing_.heartbeat_s, timing_.timeout_s});
     w.version = hi;
     send_raw(id, w);
-    log_(h.name + " connected: " + h.software + " (pid " + std::to_string(h.pid) + ", protocol " + std::to_string(hi) + ")");
+    log_(h.name + " connected: " + printable(h.software, 200) + " (pid " + std::to_string(h.pid) + ", protocol " + std::to_string(hi) + ")");
 }
 
 // A participant that reports an ERROR and exits (as a script ending in sys.exit(1) does) is reported by its

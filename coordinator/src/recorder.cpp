@@ -4,6 +4,7 @@
 #include <cctype>
 #include <fstream>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -25,21 +26,27 @@ namespace {
 
 std::string quoted(const std::string& name) { return "'" + protocol::printable(name, 64) + "'"; }
 
-// Returns how many entries the (nested) table holds.
-std::size_t check_info_keys(const std::string& prefix, const Value& v, std::size_t seen = 0) {
-    if (!v.is_table()) return seen;
+// Every entry of the (nested) table is recorded as one attribute named by its dotted path: a value the
+// record cannot hold, or two entries that would land on one name (`a.b` and `a = {b}`, or `software`, the
+// HELLO's), would lose one of them without a word. `names` collects the attribute names.
+void check_info_keys(const std::string& prefix, const Value& v, std::set<std::string>& names) {
     for (const auto& [k, x] : v.as_table()) {
         if (!plain_name(k))
             throw RecordRefused("sent READY info key " + quoted(prefix + k) +
                                 ", which is not a plain name (" + kPlainNameRule + ")");
-        if (++seen > kMaxInfoEntries)
+        if (names.size() > kMaxInfoEntries)  // `names` starts with the HELLO's software
             throw RecordRefused("sent more than " + std::to_string(kMaxInfoEntries) + " READY info entries");
         if (x.is_string() && x.as_string().size() > kMaxInfoString)
             throw RecordRefused("sent READY info " + quoted(prefix + k) + " of " + std::to_string(x.as_string().size()) +
                                 " bytes; at most " + std::to_string(kMaxInfoString));
-        seen = check_info_keys(prefix + k + ".", x, seen);
+        if (!(x.is_number() || x.is_string() || x.is_bool() || x.is_table()))
+            throw RecordRefused("sent READY info " + quoted(prefix + k) + " as " + x.type_name() +
+                                "; allowed: a number, string, boolean or map");
+        if (!names.insert(prefix + k).second)
+            throw RecordRefused("sent READY info " + quoted(prefix + k) + " twice (a dotted key and a nested map, or "
+                                "the HELLO's 'software')");
+        if (x.is_table()) check_info_keys(prefix + k + ".", x, names);
     }
-    return seen;
 }
 
 void write_value_attributes(hid_t object, const std::string& prefix, const Value& v) {
@@ -194,7 +201,8 @@ h5::Series& Recorder::series(const std::string& path, const std::vector<hsize_t>
 }
 
 void Recorder::set_participant(const std::string& role, const std::string& software, const Value& info) {
-    check_info_keys("", info);
+    std::set<std::string> names{"software"};
+    if (info.is_table()) check_info_keys("", info, names);
     std::string path = "/participants/" + role;
     h5::create_groups(h5_.get(), path);
     h5::Handle g(H5Gopen2(h5_.get(), path.c_str(), H5P_DEFAULT), H5Gclose, "open " + path);

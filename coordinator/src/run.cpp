@@ -75,10 +75,12 @@ public:
     int execute();
 
 private:
-    void log(const std::string& s) {
+    void log(const std::string& s) { log(s, s); }
+    // `screen` to stderr, `file` to run.log (which others may read: no secrets there).
+    void log(const std::string& screen, const std::string& file) {
         progress_finish();
-        std::cerr << "sphfsi: " << s << std::endl;
-        if (log_file_) log_file_ << s << std::endl;
+        std::cerr << "sphfsi: " << screen << std::endl;
+        if (log_file_) log_file_ << file << std::endl;
     }
     void progress_finish() {
         if (progress_) progress_->finish();
@@ -232,8 +234,10 @@ void Runner::initialise(std::optional<Checkpoint>& resume) {
     if (launcher_) {
         for (const auto& role : roles_) launcher_->start(role, program_for(role), hub_->token());
     } else {
-        log("waiting for " + std::to_string(roles_.size()) + " participant(s) at " + hub_->endpoint() +
-            "; start each with --connect " + hub_->endpoint() + " --name ROLE and SPHFSI_TOKEN=" + hub_->token());
+        // The token is what keeps another local process out of the run; run.log is readable by others.
+        const std::string waiting = "waiting for " + std::to_string(roles_.size()) + " participant(s) at " + hub_->endpoint() +
+                                    "; start each with --connect " + hub_->endpoint() + " --name ROLE and SPHFSI_TOKEN=";
+        log(waiting + hub_->token(), waiting + "(the token: on stderr only)");
     }
     hub_->await_hellos(roles_);
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <msgpack.hpp>
 
 #include "sphfsi/protocol/msgpack_writer.hpp"
@@ -419,6 +420,9 @@ Body read_body(MessageType type, std::uint32_t version, const msgpack::object& o
             x.version = need_u32(m.need("version"), w + ".version");
             x.heartbeat_s = need_double(m.need("heartbeat_s"), w + ".heartbeat_s");
             x.timeout_s = need_double(m.need("timeout_s"), w + ".timeout_s");
+            // A NaN timeout would never expire: the participant would outlive a silent coordinator.
+            for (double s : {x.heartbeat_s, x.timeout_s})
+                if (!(s > 0.0) || !std::isfinite(s)) bad(w + ": heartbeat_s and timeout_s must be finite numbers > 0");
             body = x;
             break;
         }
@@ -604,12 +608,36 @@ void read_envelope_rest(MapReader& env, Message& m, std::string& type) {
     env.finish();
 }
 
+// msgpack-c allocates an object (24 bytes) for every entry an array or map declares as soon as it reads the
+// header: one 5-byte header declaring 2^20 entries cost 24 MiB, and a 64 MiB message of nested nils took
+// 1.6 GB to decode. Counting what the whole message declares first bounds that: bulk data travels as bin,
+// so a real message declares a few thousand entries at most.
+struct DeclaredEntries : msgpack::null_visitor {
+    std::size_t count = 0, limit = 0;
+    bool add(std::size_t n) {
+        count += n;
+        return count <= limit;
+    }
+    bool start_array(std::uint32_t n) { return add(n); }
+    bool start_map(std::uint32_t n) { return add(2 * std::size_t{n}); }
+};
+
 }  // namespace
 
 Message decode(const void* data, std::size_t size, const DecodeLimits& limits) {
     if (size > limits.max_bytes)
         throw ProtocolError("too_large", "message of " + std::to_string(size) + " bytes exceeds the limit of " +
                                              std::to_string(limits.max_bytes));
+    DeclaredEntries declared;
+    declared.limit = limits.max_objects;
+    std::size_t scanned = 0;
+    try {
+        msgpack::parse(static_cast<const char*>(data), size, scanned, declared);
+    } catch (const std::exception&) {
+        // a parse error: the unpack below names it
+    }
+    if (declared.count > limits.max_objects)
+        bad("message declares more than " + std::to_string(limits.max_objects) + " array and map entries");
     msgpack::object_handle oh;
     std::size_t offset = 0;
     try {
@@ -623,17 +651,19 @@ Message decode(const void* data, std::size_t size, const DecodeLimits& limits) {
     }
     if (offset != size) bad("message has " + std::to_string(size - offset) + " trailing bytes");
 
-    MapReader env(oh.get(), "envelope");
+    // The type is attached to every refusal it can be read from: a malformed HEARTBEAT or ERROR is not answered.
+    std::optional<MapReader> env;
     Message m;
     // seq first, so that the refusal of a message whose seq is readable answers it by that seq.
     try {
-        m.seq = need_uint(env.need("seq"), "envelope.seq");
+        env.emplace(oh.get(), "envelope");
+        m.seq = need_uint(env->need("seq"), "envelope.seq");
     } catch (const ProtocolError& e) {
         throw ProtocolError(e.code(), e.what(), 0, peek_type(oh.get()));
     }
     std::string type;
     try {
-        read_envelope_rest(env, m, type);
+        read_envelope_rest(*env, m, type);
     } catch (const ProtocolError& e) {
         throw ProtocolError(e.code(), e.what(), m.seq, type);
     }

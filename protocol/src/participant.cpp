@@ -220,6 +220,11 @@ private:
             }
             if (m.type != MessageType::Welcome) continue;
             const auto& w = m.as<Welcome>();
+            if (w.version < kOldestSupportedVersion || w.version > kProtocolVersion) {
+                log("the coordinator chose protocol " + std::to_string(w.version) + ", outside the " +
+                    std::to_string(kOldestSupportedVersion) + ".." + std::to_string(kProtocolVersion) + " we offered");
+                return false;
+            }
             version_ = w.version;
             heartbeat_s_ = w.heartbeat_s;
             timeout_s_ = w.timeout_s;

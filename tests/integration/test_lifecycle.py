@@ -161,6 +161,10 @@ def test_frames_that_cannot_be_recorded_are_named():
     run_fault("frame_changes", "error: structure changed its FRAME fields from [y] to [y, zz]", 5)
     run_fault("frame_empty", "error: structure sent the FRAME field 'z' of shape [0, 4294967296]", 5)
     run_fault("info_bad_key", "error: structure sent READY info key ''", 5)
+    # Each was recorded losing an entry without a word before 2026-11-27 (a review).
+    run_fault("info_twice", "error: structure sent READY info 'a.b' twice", 5)
+    run_fault("info_software", "error: structure sent READY info 'software' twice", 5)
+    run_fault("info_array", "error: structure sent READY info 'arr' as an array; allowed: a number, string", 5)
     run_fault("stats_text", "error: structure reports stats 'x' that is not a number", 5)
     run_fault("stats_bad_name", "error: structure reports stats 'a/b', which is not a plain name", 5)
     # Bounds: a participant cannot make the record hold unbounded attributes or columns (200,000 info keys
@@ -227,6 +231,12 @@ def test_stray_connection_is_refused_and_logged():
     assert stray.poll(5000)
     reply = msgpack.unpackb(stray.recv(), raw=False)
     assert reply["body"]["code"] == "bad_message" and reply["token"] == "", reply
+    # A stranger's message beyond 64 KiB is refused unread: decoding a large one on the coordinator's only
+    # thread had held its heartbeats past the participants' timeout (a review's 160 MiB of nils stopped a run).
+    stray.send(msgpack.packb([None] * 100000))
+    assert stray.poll(5000)
+    reply = msgpack.unpackb(stray.recv(), raw=False)
+    assert reply["body"]["code"] == "too_large", reply
     bad_hello = dict(hello, colour="blue")  # readable seq, a key HELLO does not have: refused by its seq
     stray.send(msgpack.packb({"v": 1, "type": "HELLO", "seq": 9, "token": "0" * 32, "body": bad_hello},
                              use_bin_type=True))
@@ -316,6 +326,9 @@ def test_listen_mode_waits_for_a_remote_participant():
     code, text = run.finish(timeout=30)
     assert code == 0, text
     assert part.wait(timeout=10) == 0
+    with open(os.path.join(out, "run.log")) as f:
+        log = f.read()
+    assert "waiting for 1 participant(s)" in log and token not in log, log  # run.log may be read by others
 
 
 def test_missing_participant_is_named():

@@ -221,6 +221,27 @@ def test_runtime_answers_as_the_protocol_document_says():
         s.close()
 
 
+def test_a_welcome_outside_what_was_offered_is_refused():
+    """A WELCOME choosing a version the participant did not offer, or a timeout that is not a finite number
+    > 0 (a NaN one never expired: the participant would outlive a silent coordinator), is not taken: the
+    participant exits 3, as without a WELCOME. Found by a review, 2026-11-27."""
+    for body, why in [({"version": 99, "heartbeat_s": 0.5, "timeout_s": 3.0}, "chose protocol 99"),
+                      ({"version": 1, "heartbeat_s": 0.5, "timeout_s": float("nan")}, "malformed answer to HELLO")]:
+        c = Coordinator()
+        with tempfile.TemporaryFile(mode="w+") as log:
+            proc = subprocess.Popen([os.path.join(harness.BIN, "sphfsi-structure"), "--connect", c.endpoint, "--name",
+                                     "structure", "--startup-timeout", "1"], env=dict(os.environ, SPHFSI_TOKEN=TOKEN),
+                                    stdout=log, stderr=subprocess.STDOUT, text=True)
+            hello = c.receive()
+            assert hello is not None and hello["type"] == "HELLO", hello
+            c.send_raw({"v": 1, "type": "WELCOME", "seq": hello["seq"], "token": TOKEN, "body": body})
+            code = proc.wait(timeout=10)
+            log.seek(0)
+            text = log.read()
+        c.close()
+        assert code == 3 and why in text, (code, text)
+
+
 def test_init_with_a_start_time_that_is_not_finite_is_bad_message_and_may_be_retried():
     # A NaN or infinite t0 used to be taken as the solver's clock: every ADVANCE then failed with bad_state.
     for p in programs():

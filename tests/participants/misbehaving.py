@@ -23,6 +23,9 @@ section picks the fault:
   mode = "frame_empty"    sends a FRAME field of shape [0, 4294967296]
   mode = "info_bad_key"   sends READY info with a key ""
   mode = "info_huge"      sends READY info with 200,000 keys
+  mode = "info_twice"     sends READY info {"a.b": 1, "a": {"b": "x"}} (one attribute name twice)
+  mode = "info_software"  sends READY info {"software": "forged"} (the HELLO's own attribute)
+  mode = "info_array"     sends READY info {"arr": [1, 2, 3]}
   mode = "ready_dt_zero"  sends READY with dt_wanted 0
   mode = "stats_text"     reports ADVANCED stats with a string value
   mode = "stats_bad_name" reports ADVANCED stats named "a/b" (it would become an HDF5 group)
@@ -100,7 +103,9 @@ def main():
             continue
         if kind == "INIT":
             mode = body["config"].get("mode", mode)
-            info = {"": 1} if mode == "info_bad_key" else {f"k{i}": i for i in range(200000)} if mode == "info_huge" else {}
+            info = {"info_bad_key": {"": 1}, "info_huge": {f"k{i}": i for i in range(200000)},
+                    "info_twice": {"a.b": 1, "a": {"b": "x"}}, "info_software": {"software": "forged"},
+                    "info_array": {"arr": [1, 2, 3]}}.get(mode, {})
             send("READY", seq, {"dt_wanted": 0.0 if mode == "ready_dt_zero" else 0.01, "interface": mesh, "info": info})
             if mode == "early":
                 zero = f8(4, [0.0] * 8)

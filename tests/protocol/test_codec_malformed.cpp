@@ -158,6 +158,20 @@ TEST_CASE("a refusal names the offending message's seq where it could be read, e
         CHECK(e.seq() == 0);
         CHECK(e.answerable() == (std::string(type) == "ADVANCE"));
     }
+    // Nor when the envelope has a key that is not a string (found by a review: the envelope's own check ran
+    // before the type was read, and the refusal was answered).
+    for (const char* type : {"HEARTBEAT", "ADVANCE"}) {
+        msgpack::sbuffer b;
+        Packer p(b);
+        p.pack_map(2);
+        p.pack("type");
+        p.pack(type);
+        p.pack(7);
+        p.pack(1);
+        const auto e = refusal(std::string(b.data(), b.size()));
+        CHECK(e.code() == "bad_message");
+        CHECK(e.answerable() == (std::string(type) == "ADVANCE"));
+    }
 }
 
 TEST_CASE("arrays whose bytes do not match their shape or dtype are refused") {
@@ -173,6 +187,38 @@ TEST_CASE("unknown type and unknown version are refused with their own codes") {
     CHECK(code_of(envelope(hb, "DANCE")) == "unknown_type");
     CHECK(code_of(envelope(hb, "HEARTBEAT", kProtocolVersion + 1)) == "version_mismatch");
     CHECK(code_of(envelope(hb, "HEARTBEAT", 0)) == "version_mismatch");
+}
+
+TEST_CASE("a message declaring more entries than the limit is refused before they are allocated") {
+    // Each declared entry costs msgpack-c a 24-byte object as soon as its array's header is read: 5 bytes
+    // declaring 2^20 nils, or nested arrays of nils, made a small message a large allocation.
+    msgpack::sbuffer buf;
+    Packer pk(buf);
+    pk.pack_map(1);
+    pk.pack("seq");
+    pk.pack_array(std::uint32_t{1} << 20);
+    DecodeLimits limits;
+    CHECK(code_of(std::string(buf.data(), buf.size()), limits) == "bad_message");  // also truncated: not read
+    msgpack::sbuffer nested;
+    Packer np(nested);
+    np.pack_array(16);
+    for (int i = 0; i < 16; ++i) {
+        np.pack_array(100000);
+        for (int k = 0; k < 100000; ++k) np.pack_nil();
+    }
+    const std::string many(nested.data(), nested.size());
+    try {
+        decode(many.data(), many.size(), limits);
+        FAIL("accepted");
+    } catch (const ProtocolError& e) {
+        CHECK(std::string(e.what()).find("declares more than") != std::string::npos);
+    }
+    limits.max_objects = 2000000;  // the same message under a looser bound is read, and refused as no envelope
+    try {
+        decode(many.data(), many.size(), limits);
+    } catch (const ProtocolError& e) {
+        CHECK(std::string(e.what()).find("envelope") != std::string::npos);
+    }
 }
 
 TEST_CASE("deep nesting is refused, not a stack overflow") {

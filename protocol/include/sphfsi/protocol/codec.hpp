@@ -13,6 +13,7 @@ struct DecodeLimits {
     std::size_t max_bytes = std::size_t{1} << 30;  // whole message; larger is refused unread
     std::size_t max_depth = 32;                    // nesting of maps/arrays
     std::size_t max_elements = 1u << 20;           // entries of one msgpack array or map
+    std::size_t max_objects = 1u << 20;            // entries of all arrays and maps together
 };
 
 std::string encode(const Message& m);
