@@ -142,6 +142,7 @@ Simulation2D::Simulation2D(const FluidSettings& settings, Scene2D scene, double 
     if (!s_.step_log.empty()) {
         step_log_ = std::make_unique<std::ofstream>(s_.step_log, std::ios::app);
         if (!*step_log_) throw SolverError("bad_config", "cannot open step_log file '" + s_.step_log + "'");
+        step_log_->precision(17);  // t must tell steps of 1e-5 s apart at t = 10 s and more
         *step_log_ << "step,t,dt,iterations,max_density_error\n";
     }
     grid_.configure(domain_lo_, domain_hi_, support_, s_.periodic);

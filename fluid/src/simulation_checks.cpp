@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "format.hpp"
 #include "sphfsi/protocol/solver.hpp"
@@ -25,15 +26,17 @@ void Simulation2D::fail(std::size_t i, const std::string& quantity, double value
 // outer corner (the brim-full tank of tests/fluid/test_failure.cpp put a spilling particle's centre 0.13 mm
 // below the top at dp = 2.5 mm, and that used to stop the run as "lost through the wall"; so did a brim-full
 // wind-driven basin). A particle that went through the wall lower down is still a failure (check_state).
+// A tank periodic in y has side walls over the whole period and no brim: nothing leaves it over a wall.
 bool Simulation2D::over_the_wall(const V& x) const {
     const auto& g = geometry_;
-    return g.walls_x && !g.lid && x[1] > g.height - g.thickness && (x[0] < -g.thickness || x[0] > g.width + g.thickness);
+    return g.walls_x && g.floor && !g.lid && x[1] > g.height - g.thickness &&
+           (x[0] < -g.thickness || x[0] > g.width + g.thickness);
 }
 
 void Simulation2D::mark_escaped() {
     // Escaped particles are frozen and leave the computation.
     const auto& g = geometry_;
-    if (!g.walls_x || g.lid) return;
+    if (!g.walls_x || !g.floor || g.lid) return;
     auto& P = st_.P;
     for (std::size_t i = 0; i < P.size(); ++i) {
         if (P.kind[i] != Kind::Fluid) continue;
@@ -45,6 +48,25 @@ void Simulation2D::mark_escaped() {
             ++st_.escaped;
         }
     }
+}
+
+// Deeper inside a static obstacle than its wall layers reach from a face the water can touch: lost through
+// it, like a particle beyond a tank wall's outer face. A box thinner than two wall layers has no such depth, so
+// there it is more than half a spacing past its middle (it came through a face and is leaving by the other).
+// A face on a tank wall is not one the water can touch: a box standing on the floor counts from its others.
+bool Simulation2D::through_obstacle(const Box& b, const V& x) const {
+    const auto& g = geometry_;
+    const double tol = 1e-9 * std::max(g.width, g.height);
+    const double d = std::min(g.thickness, std::max(0.0, 0.5 * (std::min(b.width, b.height) - s_.dp)));
+    const double inf = std::numeric_limits<double>::infinity();
+    const double x_lo = g.walls_x && b.x0 <= tol ? -inf : b.x0 + d;
+    const double x_hi = g.walls_x && b.x0 + b.width >= g.width - tol ? inf : b.x0 + b.width - d;
+    const double y_lo = g.floor && b.y0 <= tol ? -inf : b.y0 + d;
+    const double y_hi = g.lid && b.y0 + b.height >= g.height - tol ? inf : b.y0 + b.height - d;
+    // The open sides extend the box only as far as the wall beside it: beyond, the tank's own checks apply.
+    const bool inside_x = x[0] > x_lo && x[0] < x_hi && x[0] > -g.thickness && x[0] < g.width + g.thickness;
+    const bool inside_y = x[1] > y_lo && x[1] < y_hi && x[1] > -g.thickness && x[1] < g.height + g.thickness;
+    return inside_x && inside_y;
 }
 
 double Simulation2D::check_state() {
@@ -65,10 +87,8 @@ double Simulation2D::check_state() {
         if (g.walls_x && (x[0] < -g.thickness || x[0] > g.width + g.thickness)) return true;
         if (g.floor && x[1] < -g.thickness) return true;
         if (g.lid && x[1] > g.height + g.thickness) return true;
-        for (const Box& b : g.obstacles) {
-            const double d = std::min(g.thickness, 0.5 * std::min(b.width, b.height));
-            if (x[0] > b.x0 + d && x[0] < b.x0 + b.width - d && x[1] > b.y0 + d && x[1] < b.y0 + b.height - d) return true;
-        }
+        for (const Box& b : g.obstacles)
+            if (through_obstacle(b, x)) return true;
         return false;
     };
 #pragma omp parallel for schedule(static) reduction(|| : bad) reduction(max : rho_max)

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "format.hpp"
 #include "sphfsi/fluid/density_summation.hpp"
@@ -87,6 +88,7 @@ void Simulation2D::evaluate() {
     auto& P = st_.P;
     move_solids(st_.t);
     sort_particles();
+    integrate_densities(std::exchange(density_dt_at_evaluation_, 0.0));
     const std::size_t n = P.size();
     const long long nn = static_cast<long long>(n);
     const bool pcisph = s_.pressure == PressureModel::Pcisph;
@@ -307,10 +309,23 @@ double Simulation2D::stable_dt() {
     }
     if (!(ss.dt >= s_.dt_min)) {
         step_dt_ = ss.dt;
+        // The particles that set the speed and force limits, found only now: the reduction does not track them.
+        const auto& P = st_.P;
+        std::size_t fastest = P.size(), hardest = P.size();
+        for (std::size_t i = 0; i < P.size(); ++i) {
+            if (P.kind[i] != Kind::Fluid) continue;
+            if (fastest == P.size() || norm2(P.v[i]) > norm2(P.v[fastest])) fastest = i;
+            if (hardest == P.size() || norm2(P.a[i]) > norm2(P.a[hardest])) hardest = i;
+        }
+        auto who = [&](std::size_t i) {
+            return i == P.size() ? std::string()
+                                 : " (particle " + std::to_string(P.id[i]) + " at (" + fmt(P.x[i][0]) + ", " + fmt(P.x[i][1]) + ") m)";
+        };
         throw SolverError("diverged", "step " + std::to_string(st_.step + 1) + ", t = " + fmt(st_.t) +
                                           " s: time step = " + fmt(ss.dt) + " s (below the floor dt_min = " +
                                           fmt(s_.dt_min) + " s; limited by " + ss.limited_by + ", largest |u| = " +
-                                          fmt(st_.u_max) + " m/s, largest |a| = " + fmt(a) + " m/s^2)");
+                                          fmt(st_.u_max) + " m/s" + who(fastest) + ", largest |a| = " + fmt(a) +
+                                          " m/s^2" + who(hardest) + ")");
     }
     return ss.dt;
 }

@@ -33,6 +33,24 @@ std::string diverge(const Value& config, double window, std::uint32_t substeps) 
     return "";
 }
 
+// One step of summed-density water thrown by a sideways gravity of 100 m/s^2 from rest at x0 = 0: the
+// block lands where it is thrown, inside what it is thrown at. Each of these ended the run quietly before
+// 2026-11-27 (a review): the checks looked at a depth the box does not have, or at a face on the floor.
+std::string thrown(Value f, double dt) {
+    f = with(f, {{"gravity", vec2(100.0, 0.0)}, {"threads", 1}, {"density.method", "summation"}});
+    auto s = start(f);
+    sphfsi::protocol::Progress progress;
+    sphfsi::protocol::AdvanceRequest req;
+    req.dt = dt;
+    req.substeps = 1;
+    try {
+        s->advance(req, progress);
+    } catch (const sphfsi::protocol::SolverError& e) {
+        return e.what();
+    }
+    return "no error";
+}
+
 }  // namespace
 
 TEST_SUITE("failure") {
@@ -53,6 +71,7 @@ TEST_SUITE("failure") {
         MESSAGE(msg);
         CHECK(msg.find("time step") != std::string::npos);
         CHECK(msg.find("below the floor") != std::string::npos);
+        CHECK(msg.find("m/s (particle ") != std::string::npos);  // the particles that set the limits are named
     }
 
     TEST_CASE("a density bound is enforced") {
@@ -119,5 +138,35 @@ TEST_SUITE("failure") {
         const std::string msg = diverge(wcsph(f), 0.001, 0);
         MESSAGE(msg);
         CHECK(msg.find("lost through the wall") != std::string::npos);
+    }
+
+    TEST_CASE("a particle through a thin obstacle or into one standing on the floor stops the run") {
+        auto tank = [](double width, double water_y0) {
+            Value b;
+            b.make_table();
+            b = with(b, {{"dp", 0.005}, {"tank.width", 0.1}, {"tank.height", 0.05}});
+            b.as_table_mut()["water"] = Value(Value::Array{block(0.0, water_y0, 0.01, 0.01)});
+            b.as_table_mut()["obstacle"] = Value(Value::Array{box(0.03, 0.0, width, 0.04)});
+            return b;
+        };
+        // A plate two spacings thin (thinner than its three wall layers): the centres land past its middle.
+        std::string msg = thrown(tank(0.01, 0.0), 0.0173205);
+        CHECK(msg.find("inside an obstacle") != std::string::npos);
+        // A wide block on the floor, the water landing in its lowest wall-layer depth.
+        msg = thrown(tank(0.04, 0.0), 0.0212);
+        CHECK(msg.find("inside an obstacle") != std::string::npos);
+        // The same at mid-height, which was caught before too.
+        msg = thrown(tank(0.04, 0.015), 0.0212);
+        CHECK(msg.find("inside an obstacle") != std::string::npos);
+    }
+
+    TEST_CASE("a tank periodic in y has no brim: a particle through its side wall is lost, not escaped") {
+        Value a;
+        a.make_table();
+        a = with(a, {{"dp", 0.005}, {"tank.width", 0.05}, {"tank.height", 0.05}, {"periodic", "y"}});
+        a.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.04, 0.01, 0.01)});
+        const std::string msg = thrown(a, 0.025);
+        MESSAGE(msg);
+        CHECK(msg.find("beyond the outer face of the right wall") != std::string::npos);
     }
 }

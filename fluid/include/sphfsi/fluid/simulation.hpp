@@ -138,8 +138,10 @@ private:
     // (PCISPH may halve it).
     double take_step(double dt, double t_after, bool adaptive, WindowStats& ws);
     void step_symplectic(double dt, double t_after);
-    void drift(double dt);
+    // Positions by dt, and integrated densities by density_dt with the rates of the positions now held.
+    void drift(double dt, double density_dt);
     void density_rates();
+    void integrate_densities(double dt);  // rho += dt drho (fluid; boundaries in the dummy model)
     void step_verlet(double dt, double t_after);
     void step_predictor_corrector(double dt, double t_after);
     double step_pcisph(double dt, double t_after, bool adaptive, WindowStats& ws);
@@ -152,6 +154,7 @@ private:
     double check_state();  // throws on a broken fluid particle; returns the largest fluid density
     void mark_escaped();
     bool over_the_wall(const V& x) const;  // beyond a side wall of an open tank, having gone over it
+    bool through_obstacle(const Box& b, const V& x) const;  // lost into a static obstacle
     [[noreturn]] void fail(std::size_t i, const std::string& quantity, double value, const std::string& why) const;
     V boundary_acceleration(std::uint32_t w) const;
 
@@ -168,6 +171,9 @@ private:
     RateParams<Dim> rates_;
     SurfaceStress<Dim> surface_;  // wind
     bool continuity_ = false;  // densities integrated (else summed)
+    // Velocity Verlet's second half of the density update, due in the coming evaluation once the particles
+    // are sorted at their new positions and before the pressures are taken from the densities (0: none).
+    double density_dt_at_evaluation_ = 0.0;
     // Integrated densities are kept at or above min(rho(p = 0), kinematic density); see the constructor.
     bool kinematic_floor_ = false;
     double kinematic_cap_ = 0.0;
