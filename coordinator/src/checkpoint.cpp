@@ -31,7 +31,7 @@ F64Array unpack_array(const msgpack::object& o) {
 
 void write_checkpoint(const std::filesystem::path& file, const Checkpoint& c) {
     Packer pk;
-    pk.pack_array(14);
+    pk.pack_array(15);
     pk.pack(std::string("sphfsi-checkpoint-1"));
     pk.pack(c.scene_file);
     pk.pack(c.scene_text);
@@ -63,6 +63,9 @@ void write_checkpoint(const std::filesystem::path& file, const Checkpoint& c) {
         pk.pack(role);
         pk.bin(bytes.data(), bytes.size());
     }
+    pk.pack_array(2);
+    pk.f64(c.loop_wall_s);
+    pk.f64(c.loop_cpu_s);
     replace_file(file, pk.bytes(), "checkpoint");
 }
 
@@ -75,7 +78,8 @@ Checkpoint read_checkpoint(const std::filesystem::path& file) {
     try {
         auto oh = msgpack::unpack(bytes.data(), bytes.size());
         const auto& a = oh.get().via.array;
-        if (a.size != 14 || a.ptr[0].as<std::string>() != "sphfsi-checkpoint-1")
+        // 14 entries before the loop times were added as the 15th (2026-11-27).
+        if (a.size < 14 || a.size > 15 || a.ptr[0].as<std::string>() != "sphfsi-checkpoint-1")
             throw std::runtime_error("not a checkpoint of this version");
         Checkpoint c;
         c.scene_file = a.ptr[1].as<std::string>();
@@ -112,6 +116,11 @@ Checkpoint read_checkpoint(const std::filesystem::path& file) {
             const auto& bin = m.ptr[k].val.via.bin;
             const auto* p = reinterpret_cast<const std::uint8_t*>(bin.ptr);
             c.states[m.ptr[k].key.as<std::string>()] = std::vector<std::uint8_t>(p, p + bin.size);
+        }
+        if (a.size > 14) {
+            const auto& loop = a.ptr[14].via.array;
+            c.loop_wall_s = loop.ptr[0].as<double>();
+            c.loop_cpu_s = loop.ptr[1].as<double>();
         }
         return c;
     } catch (const std::exception& e) {

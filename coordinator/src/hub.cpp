@@ -71,11 +71,12 @@ std::uint64_t Hub::send(const std::string& role, MessageType type, Body body) {
     return m.seq;
 }
 
-Message Hub::await_reply(const std::string& role, std::uint64_t seq) {
+Message Hub::await_reply(const std::string& role, std::uint64_t seq, double* roundtrip_s) {
     while (true) {
         auto& box = inbox_[role];
         if (auto it = box.find(seq); it != box.end()) {
-            Message m = std::move(it->second);
+            Message m = std::move(it->second.message);
+            if (roundtrip_s) *roundtrip_s = it->second.roundtrip_s;
             box.erase(it);
             if (m.type == MessageType::Error) throw reported(role, m.as<ErrorReply>());
             return m;
@@ -213,8 +214,10 @@ void Hub::file_reply(const std::string& role, Message m) {
         throw ParticipantFailure(role, "garbage", "answered " + std::string(to_string(request->second.type)) + " (seq " +
                                                       std::to_string(m.seq) + ") with " + std::string(to_string(m.type)) +
                                                       ", not " + std::string(to_string(expected)));
+    const double roundtrip = seconds_since(request->second.sent);
     open.erase(request);
-    inbox_[role][m.seq] = std::move(m);
+    const std::uint64_t seq = m.seq;
+    inbox_[role].insert_or_assign(seq, Reply{std::move(m), roundtrip});
 }
 
 void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) {
@@ -282,8 +285,8 @@ void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) 
 void Hub::report_exit(const std::string& role, const std::string& how) {
     const auto until = Clock::now() + std::chrono::milliseconds(500);  // (a loaded machine delivers late)
     while (Clock::now() < until) {
-        for (const auto& [seq, m] : inbox_[role])
-            if (m.type == MessageType::Error) throw reported(role, m.as<ErrorReply>());
+        for (const auto& [seq, reply] : inbox_[role])
+            if (reply.message.type == MessageType::Error) throw reported(role, reply.message.as<ErrorReply>());
         wait_for_input(20, false);
         receive_all();
     }

@@ -7,8 +7,9 @@
 namespace sphfsi::coordinator {
 using Clock = std::chrono::steady_clock;
 
-ProgressDisplay::ProgressDisplay(double t0, double t_end, bool quiet)
-    : t0_(t0), t_end_(t_end), tty_(::isatty(STDERR_FILENO) != 0), quiet_(quiet), start_(Clock::now()), last_(start_) {}
+ProgressDisplay::ProgressDisplay(double t0, double t_end, bool quiet, std::uint64_t steps0)
+    : t0_(t0), t_end_(t_end), tty_(::isatty(STDERR_FILENO) != 0), quiet_(quiet), start_(Clock::now()), last_(start_),
+      steps0_(steps0) {}
 
 void ProgressDisplay::update(double t, std::uint64_t steps) {
     steps_ = steps;
@@ -22,7 +23,7 @@ void ProgressDisplay::update(double t, std::uint64_t steps) {
     double eta = done > 0 ? wall * (1 - done) / done : 0;
     char line[200];
     std::snprintf(line, sizeof line, "t = %.5g s  %5.1f %%  %.0f steps/s  elapsed %.0f s  ETA %.0f s", t, 100 * done,
-                  wall > 0 ? steps / wall : 0.0, wall, eta);
+                  wall > 0 ? static_cast<double>(steps - steps0_) / wall : 0.0, wall, eta);
     if (tty_) {
         std::fprintf(stderr, "\r%-78s", line);
         drawn_ = true;

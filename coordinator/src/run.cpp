@@ -118,6 +118,12 @@ private:
     // measured over the same interval as its wall time; start-up and shut-down are not in it.
     std::optional<Clock::time_point> loop_start_;
     double loop_cpu_start_ = 0.0;
+    // The loop's wall and CPU time in the segments before the checkpoint this run resumed from.
+    double loop_wall_before_ = 0.0, loop_cpu_before_ = 0.0;
+    double loop_wall_so_far() const {
+        return loop_wall_before_ + (loop_start_ ? std::chrono::duration<double>(Clock::now() - *loop_start_).count() : 0.0);
+    }
+    double loop_cpu_so_far() const { return loop_cpu_before_ + (loop_start_ ? cpu_seconds() - loop_cpu_start_ : 0.0); }
     EnergyLimits energy_limits_;
 };
 
@@ -196,8 +202,7 @@ int Runner::execute() {
         status = std::string("failed: ") + e.what();
         code = 1;
     }
-    const double loop_cpu = loop_start_ ? cpu_seconds() - loop_cpu_start_ : 0.0;
-    const double loop_wall = loop_start_ ? std::chrono::duration<double>(Clock::now() - *loop_start_).count() : 0.0;
+    const double loop_cpu = loop_cpu_so_far(), loop_wall = loop_wall_so_far();
     progress_finish();
     if (hub_) hub_->goodbye(code == 0 ? 5.0 : 1.0);
     if (launcher_)
@@ -307,13 +312,15 @@ void Runner::initialise(std::optional<Checkpoint>& resume) {
         steps_ = resume->steps;
         fluid_dt_ = resume->fluid_dt;
         structure_dt_ = resume->structure_dt;
+        loop_wall_before_ = resume->loop_wall_s;
+        loop_cpu_before_ = resume->loop_cpu_s;
         log("resumed at t = " + std::to_string(t0_) + " s");
     } else {
         snapshot_all();  // frame 0: the initial state
         if (watchpoints_) watchpoints_->write(t_, iface_.displacement);
     }
     recorder_->set_text("window_rule_legend", window_rule_legend());
-    progress_ = std::make_unique<ProgressDisplay>(t0_, end_, opt_.quiet);
+    progress_ = std::make_unique<ProgressDisplay>(t0_, end_, opt_.quiet, steps_);
 }
 
 // Wind on the free surface or a sliding lid does work on the fluid, so the pair's energy may rise: the energy
@@ -350,10 +357,7 @@ WindowPlan Runner::plan_window(double t_stop) const {
     }
     p.dt = structure_dt_;
     p.structure_substeps = 1;
-    if (t_ + p.dt >= t_stop * (1 - 1e-14) || t_stop - (t_ + p.dt) < 1e-9 * p.dt) {
-        p.clipped = t_ + p.dt > t_stop;
-        p.dt = t_stop - t_;
-    }
+    land_on_stop(p, t_stop);
     return p;
 }
 
@@ -399,11 +403,13 @@ void Runner::loop() {
             work = interface_work(o.structure_force, iface_.force, structure_start, iface_.displacement, fluid_start,
                                   iface_.fluid_displacement);
         record_window(plan, o, wall, work);
-        // After the window is recorded, so a run stopped by the energy checks keeps the window that tripped them.
-        if (coupled_) account_energy(energy_limits_, windows_, t_, o, work, iface_);
         if (watchpoints_) watchpoints_->write(t_, iface_.displacement);
+        // After the window is recorded, so that a run stopped here keeps the window that stopped it.
+        if (!o.stop_run.empty()) throw std::runtime_error(o.stop_run);
+        if (coupled_) account_energy(energy_limits_, windows_, t_, o, work, iface_);
         progress_->update(t_, steps_);
-        if (t_ >= output_index_ * output_dt_ - eps) snapshot_all();
+        // Frames at k * output_interval, and the end's state whether or not end_time is one of those.
+        if (t_ >= output_index_ * output_dt_ - eps || t_ >= end_ - eps) snapshot_all();
         if (t_ >= (checkpoint_index_ + 1) * checkpoint_dt_ - eps && t_ < end_ - eps) checkpoint();
     }
 }
@@ -483,6 +489,8 @@ void Runner::checkpoint() {
     c.fluid_dt = fluid_dt_;
     c.structure_dt = structure_dt_;
     c.interface = iface_;
+    c.loop_wall_s = loop_wall_so_far();
+    c.loop_cpu_s = loop_cpu_so_far();
     for (const auto& role : roles_) {
         Message m = hub_->request(role, MessageType::Checkpoint);
         const State& state = m.as<State>();

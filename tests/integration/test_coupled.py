@@ -70,6 +70,20 @@ def test_coupled_scenes_run_end_to_end():
             assert 0 <= a["messaging_and_waiting_s"] <= a["wall_s"]
 
 
+def test_messaging_is_timed_to_each_replys_arrival_under_parallel_explicit():
+    """Parallel-explicit sends both ADVANCEs and collects the fluid's reply first: the structure's round trip
+    was timed when it was collected, so it held the fluid's compute time, and the summed messaging came out
+    above the run's wall time (0.294 s against 0.204 s, a review, 2026-11-27)."""
+    out = harness.out_dir("parallel-messaging")
+    harness.sphfsi("run", os.path.join(harness.SCENES, "swap_python.toml"), "--out", out, "--quiet", "--set",
+                   "coupling.scheme=parallel-explicit", "--set", "run.end_time=0.02", check=0, timeout=120)
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        a = f.attrs
+        assert 0 <= a["messaging_and_waiting_s"] <= a["wall_s"], (a["messaging_and_waiting_s"], a["wall_s"])
+        w = f["windows"]
+        assert (w["structure_roundtrip_s"][:] <= w["wall_s"][:] + 1e-9).all()
+
+
 def shared_sections(path):
     with open(path, "rb") as fh:
         scene = tomllib.load(fh)
@@ -224,6 +238,81 @@ def test_added_mass_blow_ups_are_stopped_by_the_energy_checks():
               f"{gain:.2e} of it")
         assert 0 < created < 0.1 * fluid[0]
         assert gain < 0.01
+
+
+def test_a_structures_own_loads_are_not_counted_as_a_coupling_gain():
+    """A point load on the plate does work from outside the pair, as wind would: the total check takes it out
+    (the structure's external_work less the interface's work). Before 2026-11-27 this stable run (the plate of
+    swap_builtin.toml 100 times more flexible, 10 kN at its middle) stopped as 'coupling diverged' in its 4th
+    window, its structure holding 8.65 J/m of the load's work against the 0.073 J/m the interface had done."""
+    scene = os.path.join(harness.SCENES, "swap_builtin.toml")
+    out = harness.out_dir("energy-point-load")
+    code, text = harness.sphfsi("run", scene, "--out", out, "--quiet", "--set", "structure.material.E=7.0e8",
+                                "--set", "structure.point_loads=[{at=[0.1, 0.09], force=[0.0, -10000.0]}]",
+                                "--set", "run.end_time=0.03", timeout=240)
+    assert code == 0, text
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert f.attrs["status"] == "completed"
+        w = f["windows"]
+        load_work = w["structure.external_work"][-1] - w["interface_work"][:].sum()
+        fluid = w["fluid.kinetic_energy"][0] + w["fluid.potential_energy"][0]
+        print(f"the load's work {load_work:.3g} J/m against the 5 % bound's {0.05 * fluid:.3g} J/m")
+        assert load_work > 0.05 * fluid, load_work  # enough to have tripped the check without the correction
+
+
+def test_a_window_that_ends_the_run_is_recorded_with_its_watchpoints():
+    """coupling.on_max_iterations = "error" ends the run on a window that did not converge; before 2026-11-27
+    the window was lost from the record (its residual and iteration count are what tell why), and a window
+    that tripped the energy checks was recorded without its watchpoint row."""
+    scene = os.path.join(harness.SCENES, "swap_builtin.toml")
+    out = harness.out_dir("stop-on-cap")
+    code, text = harness.sphfsi("run", scene, "--out", out, "--quiet", "--set", "coupling.scheme=implicit-fixed",
+                                "--set", "coupling.max_iterations=1", "--set", "coupling.tolerance_rel=1e-12",
+                                "--set", "coupling.tolerance_abs=0", "--set", "coupling.on_max_iterations=error",
+                                timeout=120)
+    assert code != 0 and "coupling did not converge" in text, text
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        w = f["windows"]
+        assert w["t"].shape[0] == 1 and w["converged"][0] == 0 and w["iterations"][0] == 1, w["t"][:]
+        assert w["residual"][0] > 0
+    with open(os.path.join(out, "watchpoints.csv")) as csv:
+        rows = [line for line in csv.read().splitlines()[1:] if line]
+    assert len({row.split(",")[0] for row in rows}) == 2, rows  # t0 and the window that ended the run
+    out = harness.out_dir("stop-on-energy")
+    code, text = harness.sphfsi("run", scene, "--out", out, "--quiet", "--set", "structure.material.E=7.0e8",
+                                "--set", "structure.material.rho=100", "--set",
+                                "structure.members[0].interface_padding=[0.0, 0.03]", timeout=240)
+    assert code != 0 and "coupling diverged" in text, text
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        windows = f["windows/t"].shape[0]
+    with open(os.path.join(out, "watchpoints.csv")) as csv:
+        rows = [line for line in csv.read().splitlines()[1:] if line]
+    assert len({row.split(",")[0] for row in rows}) == windows + 1, (windows, rows[-3:])
+
+
+def test_no_sliver_of_a_window_before_an_output_time():
+    """Windows of 1 ms with output times a hair off their multiples (0.01000000001 s): before 2026-11-27 the
+    leftover became a window of 1e-11 s whose fluid force was 25 times the force around it, and the quadratic
+    predictor, which divides by the last window's length, made the interface create 0.6 J/m and moved the
+    plate by 25 %. The rest before an output time is now split into two equal windows, and the run agrees
+    with the one whose output times are the window multiples: the same largest energy created in a window
+    (the first's, 2.2e-4 J/m) and the same final deflection to 1e-4 of it (measured 4e-6)."""
+    scene = os.path.join(harness.SCENES, "swap_builtin.toml")
+    results = {}
+    for interval in ("0.01", "0.01000000001"):
+        out = harness.out_dir("sliver")
+        harness.sphfsi("run", scene, "--out", out, "--quiet", "--set", "coupling.window=fixed", "--set",
+                       "coupling.window_dt=1e-3", "--set", "coupling.predictor=quadratic", "--set",
+                       f"run.output_interval={interval}", "--set", "run.end_time=0.014", check=0, timeout=120)
+        with harness.record(os.path.join(out, "record.h5")) as f:
+            w = f["windows"]
+            assert abs(w["t"][-1] - 0.014) < 1e-12
+            results[interval] = (w["dt"][:].min(), abs(w["interface_energy_created"][:]).max(),
+                                 f["interface/displacement"][-1, :, 1].min())
+    (dt0, created0, deflection0), (dt1, created1, deflection1) = results["0.01"], results["0.01000000001"]
+    assert dt1 >= 0.5e-3 * (1 - 1e-9), dt1
+    assert created1 <= 1.01 * created0, (created1, created0)
+    assert abs(deflection1 - deflection0) <= 1e-4 * abs(deflection0), (deflection1, deflection0)
 
 
 def quad_distance(p, quad):

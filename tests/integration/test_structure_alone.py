@@ -119,5 +119,20 @@ def test_a_structure_with_nothing_wetted_runs_alone():
     assert "connected" not in text and not os.path.exists(os.path.join(watched, "record.h5")), text
 
 
+def test_the_end_is_recorded_when_it_is_not_an_output_time():
+    """The last frame holds the state at run.end_time, also when end_time is not a multiple of the output
+    interval: before 2026-11-27 the run's result was then only in the window rows (beam_only to 0.05 s every
+    0.02 s recorded frames at 0, 0.02 and 0.04 s; with output_interval 0.1 s, frame 0 alone)."""
+    scene = os.path.join(harness.ROOT, "scenarios", "beam_only.toml")
+    for interval, frames in ((0.02, [0.0, 0.02, 0.04, 0.05]), (0.1, [0.0, 0.05])):
+        out = harness.out_dir("end-frame")
+        harness.sphfsi("run", scene, "--out", out, "--quiet", "--set", "run.end_time=0.05", "--set",
+                       f"run.output_interval={interval}", check=0, timeout=60)
+        with harness.record(os.path.join(out, "record.h5")) as f:
+            times = list(f["frames/structure/time"][:])
+            assert len(times) == len(frames) and all(abs(a - b) < 1e-12 for a, b in zip(times, frames)), times
+            assert abs(f["windows/t"][-1] - 0.05) < 1e-12
+
+
 if __name__ == "__main__":
     harness.main(globals())

@@ -230,8 +230,10 @@ public:
             std::ostringstream msg;
             msg << "coupling did not converge in window t = " << p.t << " s after " << o.iterations
                 << " iterations (residual " << o.residual << " m; coupling.max_iterations)";
-            if (fail_on_cap_) throw std::runtime_error(msg.str());
-            log_("warning: " + msg.str());
+            if (fail_on_cap_)
+                o.stop_run = msg.str();
+            else
+                log_("warning: " + msg.str());
         }
         return o;
     }

@@ -21,6 +21,9 @@ struct Checkpoint {
     double fluid_dt = 0.0, structure_dt = 0.0;  // steps the participants last asked for
     InterfaceState interface;
     std::map<std::string, std::vector<std::uint8_t>> states;  // role -> STATE bytes
+    // The time loop's wall and coordinator CPU time up to the checkpoint, over every segment of the run, so
+    // that a resumed run's loop_wall_s covers the windows its wall_s sums (0 in checkpoints written before).
+    double loop_wall_s = 0.0, loop_cpu_s = 0.0;
 };
 
 void write_checkpoint(const std::filesystem::path& file, const Checkpoint& c);

@@ -21,6 +21,10 @@ struct WindowPlan {
     bool clipped = false;  // shortened to land on an output time or the end
 };
 
+// Shortens p.dt (from p.t) so that the windows land exactly on t_stop without a sliver of a window before
+// it; sets p.clipped when the window is shorter than wanted.
+void land_on_stop(WindowPlan& p, double t_stop);
+
 // Chooses the next window from the steps both sides want (coupled runs).
 class Schedule {
 public:
@@ -43,6 +47,9 @@ struct WindowOutcome {
     std::uint32_t iterations = 1;  // coupling iterations (1 for explicit schemes)
     double residual = 0.0;         // final interface displacement residual norm [m] (0 for explicit)
     bool converged = true;
+    // Set when the window must end the run (coupling.on_max_iterations = "error"): the loop records the
+    // window first, so the record keeps the residual and iteration count that ended it.
+    std::string stop_run;
 };
 
 using Log = std::function<void(const std::string&)>;

@@ -67,8 +67,9 @@ public:
 
     std::uint64_t send(const std::string& role, protocol::MessageType type, protocol::Body body = protocol::Empty{});
     // Waits for the reply to `seq`, which the hub has already checked is of the request's reply type; an
-    // ERROR reply becomes a ParticipantFailure with its code.
-    protocol::Message await_reply(const std::string& role, std::uint64_t seq);
+    // ERROR reply becomes a ParticipantFailure with its code. `roundtrip_s`: from the send to the reply's
+    // arrival, which may be well before this call when another participant's reply was awaited first.
+    protocol::Message await_reply(const std::string& role, std::uint64_t seq, double* roundtrip_s = nullptr);
     protocol::Message request(const std::string& role, protocol::MessageType type, protocol::Body body = protocol::Empty{}) {
         return await_reply(role, send(role, type, std::move(body)));
     }
@@ -103,7 +104,11 @@ private:
     std::map<std::string, PeerInfo> peers_;              // by role
     std::map<std::string, std::string> identity_role_;   // routing identity -> role
     std::map<std::string, std::string> role_identity_;
-    std::map<std::string, std::map<std::uint64_t, protocol::Message>> inbox_;  // role -> seq -> reply
+    struct Reply {
+        protocol::Message message;
+        double roundtrip_s;  // from the request's send to the reply's arrival
+    };
+    std::map<std::string, std::map<std::uint64_t, Reply>> inbox_;  // role -> seq -> reply
     struct OpenRequest {
         protocol::MessageType type;
         std::chrono::steady_clock::time_point sent;

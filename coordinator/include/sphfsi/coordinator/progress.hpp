@@ -9,7 +9,8 @@ namespace sphfsi::coordinator {
 
 class ProgressDisplay {
 public:
-    ProgressDisplay(double t0, double t_end, bool quiet);
+    // `steps0`: steps taken before this process (a resumed run), left out of the rate.
+    ProgressDisplay(double t0, double t_end, bool quiet, std::uint64_t steps0 = 0);
     void update(double t, std::uint64_t steps);
     void finish();
 
@@ -17,7 +18,7 @@ private:
     double t0_, t_end_;
     bool tty_, quiet_;
     std::chrono::steady_clock::time_point start_, last_;
-    std::uint64_t steps_ = 0;
+    std::uint64_t steps0_, steps_ = 0;
     bool drawn_ = false;
 };
 

@@ -31,7 +31,6 @@ private:
     struct Asked {  // the ADVANCE in flight, to check its reply against
         double t = 0.0, dt = 0.0;
         std::uint32_t substeps = 0;
-        std::chrono::steady_clock::time_point sent;
     };
     Hub& hub_;
     std::map<std::string, Asked> asked_;
