@@ -109,7 +109,8 @@ double column_top(const sphfsi::fluid::ParticleStore<2>& P, double dp) {
 struct DamBreakResult {
     std::vector<double> front_errors, height_errors;  // relative, per reference point
     std::uint64_t steps = 0, iterations = 0;
-    double max_density_error = 0.0;
+    double max_density_error = 0.0;  // as the fluid reports it (PCISPH: its prediction's, which it iterates on)
+    double max_summed_compression = 0.0;  // after each window, of the densities the rates see (summed: re-summed)
     std::size_t crossings = 0;
 };
 
@@ -136,6 +137,14 @@ DamBreakResult run_dam_break(const Value& config, const char* name) {
             res.iterations += r.solver_iterations;
             res.max_density_error = std::max(res.max_density_error, r.stats.at("max_density_error").as_double());
             res.crossings += solver->simulation().wall_crossings().count;
+            // The densities the particles have where they ended, not the prediction the solver iterated on:
+            // evaluating the rates now (which the next step would do first anyway) sums them there.
+            auto& sim = solver->simulation();
+            sim.stable_dt();
+            const auto& P = sim.particles();
+            for (std::size_t i = 0; i < P.size(); ++i)
+                if (P.kind[i] == Kind::Fluid)
+                    res.max_summed_compression = std::max(res.max_summed_compression, P.rho[i] / 1000.0 - 1.0);
         });
         const auto& P = solver->simulation().particles();
         const double sim = probe.front ? front_x(P, dp) / a : column_top(P, dp) / (2.0 * a);
@@ -150,9 +159,10 @@ DamBreakResult run_dam_break(const Value& config, const char* name) {
     for (std::size_t i = 0; i < P.size(); ++i)
         if (P.kind[i] == Kind::Fluid) (P.tag[i] == 0 ? left : right) += 1;
     CHECK(left == right);
-    std::printf("dam break (%s): %llu steps, %llu PCISPH iterations, largest density error %.5f of rho0, "
-                "%zu wall crossings\n", name, static_cast<unsigned long long>(res.steps),
-                static_cast<unsigned long long>(res.iterations), res.max_density_error, res.crossings);
+    std::printf("dam break (%s): %llu steps, %llu PCISPH iterations, largest density error %.7f of rho0 as "
+                "reported, largest compression %.7f of the densities after each window, %zu wall crossings\n",
+                name, static_cast<unsigned long long>(res.steps), static_cast<unsigned long long>(res.iterations),
+                res.max_density_error, res.max_summed_compression, res.crossings);
     return res;
 }
 
@@ -190,20 +200,27 @@ TEST_SUITE("dam_break") {
     TEST_CASE("PCISPH: surge front and column height, and the density error stays under eta") {
         const auto res = run_dam_break(pcisph(dam_break(0.1 / 40)), "PCISPH");
         check_against_experiment(res);
-        CHECK(res.iterations >= 3 * res.steps);   // at least three corrections per step
-        CHECK(res.max_density_error < 0.01);      // eta = 0.01 (default)
+        // The solver stops iterating when its predicted densities are within eta, so what it reports can only
+        // be under eta; the check is on the densities summed again where the particles ended each window
+        // (measured 2026-11-27: 0.0099979, the prediction's 0.0099990). eta = 0.01, the default.
+        CHECK(res.max_summed_compression < 0.01);
     }
 
     TEST_CASE("standard SPH: compressibility at the thesis's stiffness is measured and reported") {
         // p = k (rho - rho0) with the default k = 1000 m^2/s^2 (c = 31.6 m/s), otherwise the WCSPH set-up.
-        // There is no pass/fail bound on the compression itself: it is the number the thesis discusses, and
-        // it is printed and recorded (docs/benchmarks.md); it must be finite and the run must stay sane.
-        const auto res = run_dam_break(with(wcsph(dam_break(0.1 / 40)), {{"pressure.model", "standard"}}), "standard SPH");
-        std::printf("standard SPH: largest compression (rho - rho0)/rho0 = %.4f\n", res.max_density_error);
+        // There is no upper bound on the compression: it is the number the thesis discusses, and it is printed
+        // and recorded (docs/benchmarks.md). It cannot be below the column's own weight's, though: the bottom
+        // row, dp/2 above the floor, holds rho0 g (2a - dp/2) = k (rho - rho0) before it falls, a compression
+        // of g (2a - dp/2) / k = 0.195 % (5 % below that allowed for the column's first settling).
+        const double dp = 0.1 / 40, k = 1000.0;
+        const auto res = run_dam_break(with(wcsph(dam_break(dp)), {{"pressure.model", "standard"}}), "standard SPH");
+        std::printf("standard SPH: largest compression (rho - rho0)/rho0 = %.4f, the column's weight's %.4f\n",
+                    res.max_density_error, g * (2 * a - 0.5 * dp) / k);
         CHECK(std::isfinite(res.max_density_error));
-        CHECK(res.max_density_error > 0.0);
+        CHECK(res.max_density_error >= 0.95 * g * (2 * a - 0.5 * dp) / k);
         CHECK(res.crossings == 0);
-        // The front and the column still behave like water.
+        // The front and the column still behave like water: a sanity bound, not a validation (the WCSPH and
+        // PCISPH tests are): standard SPH's front stays within 2 points of theirs, whose lead is under 20 %.
         for (double e : res.front_errors) CHECK(std::abs(e) < 0.25);
         for (double e : res.height_errors) CHECK(std::abs(e) <= 0.10);
     }

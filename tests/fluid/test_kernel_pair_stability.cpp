@@ -100,9 +100,8 @@ TEST_SUITE("kernel_pair_stability") {
     }
 
     TEST_CASE("one kernel for densities and gradients: nothing grows at rest") {
-        const double gamma = with_kernels<2>(KernelChoice::Wendland, 1.5 * dp,
-                                             [](const auto& kw, const auto& kg) { return fastest_growth(kw, kg); });
-        CHECK(gamma == 0.0);
+        // (With one kernel G_p . G_rho = |G|^2 >= 0 for every k, so the analysis predicts no growth by
+        // construction; what is tested is the solver.)
         auto s = box_at_rest("wendland");
         const double e0 = kinetic_energy(*s);
         double most = 0.0;

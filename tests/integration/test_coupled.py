@@ -161,7 +161,10 @@ def test_every_coupling_scheme_and_window_rule_carries_the_load():
     for label, (dy, iters, windows, created) in results.items():
         print(f"{label:10s} dy = {dy:.4e} m, {iters:.2f} iterations per window, {windows} windows, "
               f"energy created at the interface {created:+.2e} of the work on the structure")
-        assert abs(dy / base - 1) < 0.05, label  # all schemes solve the same problem
+        # All schemes solve the same problem; they differ by the explicit schemes' lag of a window (O(dt)) and
+        # the implicit ones' tolerance: measured 0.15 - 0.18 % from serial-explicit (2026-11-27). 1 % tells a
+        # consistent scheme from one that loses or doubles a force (tens of per cent).
+        assert abs(dy / base - 1) < 0.01, label
 
 
 def test_the_work_booked_at_the_interface_is_the_work_the_structure_reports():

@@ -312,7 +312,9 @@ def test_runner_kills_what_ignores_sigint():
     res = runner.run_coordinator(fake, BEAM, out, [], timeout_s=1.0, grace_s=1.0)
     with open(os.path.join(out, "child.pid")) as f:
         child = int(f.read())
-    time.sleep(0.2)
+    deadline = time.time() + 5.0  # the kernel reaps the killed group a moment later on a loaded machine
+    while harness.pid_alive(child) and time.time() < deadline:
+        time.sleep(0.05)
     assert not harness.pid_alive(child), "the participant outlived the SIGKILL"
     assert res.timed_out and res.killed and res.exit_code == -9, vars(res)
     # SIGINT at the 1 s timeout, SIGKILL 1 s later; 1.5 s of slack for a loaded 2-core machine.
@@ -777,7 +779,10 @@ label = "density"
         assert int(r["fluid_particles"]) == fluid_now
         assert int(r["particle_steps"]) == fluid_now * substeps == int(r["fluid_particles"]) * int(r["fluid_substeps"])
         assert int(r["front.n_points"]) == 9
-        # WCSPH leads the gate-delayed experiment by 10-20 % (tests/fluid/test_dam_break.cpp).
+        # What the columns must hold, not a validation (test_dam_break.cpp is): WCSPH leads the experiment by
+        # 10 - 20 % at every point from T = 0.84 on, so its mean is under 0.25 (measured 0.061 - 0.131,
+        # docs/validation.md), and its densities stay within the 1 % weak compressibility aims at, with the
+        # impact's peaks: under 5 % (measured 0.5 - 0.65 %).
         assert 0 < num(r["front.mean_rel"]) < 0.25, r["front.mean_rel"]
         assert 0 < num(r["density.max"]) < 0.05, r["density.max"]
 
@@ -847,8 +852,9 @@ def test_added_mass_explicit_diverges_implicit_holds():
     explicit coupling diverges while Aitken with one window per fluid step stays stable; at 0.003 IQN-ILS over
     multi-rate windows stays stable. At 0.0003 Aitken with the structure sub-cycled in thesis windows diverges,
     and with one backward-Euler structure step per window (coupling.structure_steps = "window") Aitken and
-    IQN-ILS hold, while explicit coupling on the same steps diverges already at 0.001. Stable: max |u - w| <= |w|
-    at mid-span from t = 5 ms on, w the static deflection (the undamped overshoot of the sudden load). The
+    IQN-ILS hold, while explicit coupling on the same steps diverges already at 0.001. Stable: max |u - w| < |w|
+    at mid-span from t = 5 ms on, w the static deflection (the undamped overshoot of the sudden load), with the
+    mean deflection within half of w (a plate that never moved would sit at |u - w| = |w| exactly). The
     blow-ups are stopped by the total energy check ("coupling diverged", docs/coupling.md)."""
     scene = os.path.join(harness.ROOT, "tests", "integration", "scenes", "swap_builtin.toml")
     d = harness.out_dir("added-mass")
@@ -862,16 +868,20 @@ def test_added_mass_explicit_diverges_implicit_holds():
         if code != 0:
             return code, msg, float("inf")
         with open(os.path.join(out, "watchpoints.csv")) as f:
-            rows = [r for r in csv.DictReader(f) if r["name"] == "mid" and float(r["time"]) >= 0.005]
-        return code, msg, max(abs(float(r["dy"]) - w) / abs(w) for r in rows)
+            dy = [float(r["dy"]) for r in csv.DictReader(f) if r["name"] == "mid" and float(r["time"]) >= 0.005]
+        # A plate that never moved (a coupling that delivers no force) would sit exactly at |u - w| = |w|: it
+        # must carry the load too, its mean deflection within half of w (the step response swings about w).
+        mean = sum(dy) / len(dy)
+        assert abs(mean / w - 1) < 0.5, (name, mean, w)
+        return code, msg, max(abs(u - w) / abs(w) for u in dy)
 
     code, msg, dev = run("explicit", 100.0)
     assert code == 1 and "coupling diverged" in msg, (code, dev, msg)
     code, msg, dev = run("aitken", 100.0, "--set", 'coupling.scheme="implicit-aitken"')
-    assert code == 0 and dev <= 1.0, (code, dev, msg)
+    assert code == 0 and dev < 1.0, (code, dev, msg)
     code, msg, dev = run("iqn", 30.0, "--set", 'coupling.scheme="implicit-iqn-ils"', "--set", 'coupling.window="multi-rate"',
                          "--set", "coupling.max_fluid_steps=10")
-    assert code == 0 and dev <= 1.0, (code, dev, msg)
+    assert code == 0 and dev < 1.0, (code, dev, msg)
 
     aitken, iqn = ("--set", 'coupling.scheme="implicit-aitken"'), ("--set", 'coupling.scheme="implicit-iqn-ils"')
     one_step = ("--set", 'coupling.structure_steps="window"', "--set", 'structure.time.integrator="backward_euler"')
@@ -880,7 +890,7 @@ def test_added_mass_explicit_diverges_implicit_holds():
     assert "coupling.structure_steps" in msg, msg  # the energy check names the remedy
     for name, scheme in (("aitken", aitken), ("iqn", iqn)):
         code, msg, dev = run(f"{name}-one-step-3e-4", 3.0, *scheme, *one_step)
-        assert code == 0 and dev <= 1.0, (name, code, dev, msg)
+        assert code == 0 and dev < 1.0, (name, code, dev, msg)
         assert "warning: coupling.structure_steps" not in msg, msg
     code, msg, dev = run("explicit-one-step-1e-3", 10.0, *one_step)
     assert code == 1 and "coupling diverged" in msg, (code, dev, msg)
