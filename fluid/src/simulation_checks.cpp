@@ -15,7 +15,7 @@ namespace sphfsi::fluid {
 using protocol::SolverError;
 
 void Simulation2D::fail(std::size_t i, const std::string& quantity, double value, const std::string& why) const {
-    throw SolverError("diverged", "step " + std::to_string(st_.step) + ", t = " + fmt(st_.t) + " s: particle " +
+    throw SolverError("diverged", "step " + std::to_string(st_.step + (stepping_ ? 1 : 0)) + ", t = " + fmt(st_.t) + " s: particle " +
                                       std::to_string(st_.P.id[i]) + ": " + quantity + " = " + fmt(value) + " (" + why + ")");
 }
 
@@ -67,6 +67,27 @@ bool Simulation2D::through_obstacle(const Box& b, const V& x) const {
     const bool inside_x = x[0] > x_lo && x[0] < x_hi && x[0] > -g.thickness && x[0] < g.width + g.thickness;
     const bool inside_y = x[1] > y_lo && x[1] < y_hi && x[1] > -g.thickness && x[1] < g.height + g.thickness;
     return inside_x && inside_y;
+}
+
+void Simulation2D::check_summed_densities() const {
+    const auto& P = st_.P;
+    const double lo = s_.min_density_ratio * s_.rho0, hi = s_.max_density_ratio * s_.rho0;
+    const long long n = static_cast<long long>(P.size());
+    bool bad = false;
+#pragma omp parallel for schedule(static) reduction(|| : bad)
+    for (long long q = 0; q < n; ++q) {
+        const std::size_t i = static_cast<std::size_t>(q);
+        bad = bad || (P.kind[i] == Kind::Fluid && !(P.rho[i] >= lo && P.rho[i] <= hi));
+    }
+    if (!bad) return;
+    std::size_t worst = P.size();  // the lowest id, as check_state names it
+    for (std::size_t i = 0; i < P.size(); ++i)
+        if (P.kind[i] == Kind::Fluid && !(P.rho[i] >= lo && P.rho[i] <= hi) && (worst == P.size() || P.id[i] < P.id[worst]))
+            worst = i;
+    const double rho = P.rho[worst];
+    if (!std::isfinite(rho)) fail(worst, "density", rho, "not finite");
+    if (rho < lo) fail(worst, "density", rho, "below min_density_ratio * rho0 = " + fmt(lo) + " kg/m^3");
+    fail(worst, "density", rho, "above max_density_ratio * rho0 = " + fmt(hi) + " kg/m^3");
 }
 
 double Simulation2D::check_state() {

@@ -95,7 +95,10 @@ void Simulation2D::evaluate() {
     const bool dummy = s_.wall == WallModel::Dummy;
     const bool summation = s_.density != DensityMethod::Continuity;
     with_kernels<Dim>(s_.kernel, h_, [&](const auto& kw, const auto& kg) {
-        if (summation) sum_densities(kw, s_.density == DensityMethod::Shepard);
+        if (summation) {
+            sum_densities(kw, s_.density == DensityMethod::Shepard);
+            check_summed_densities();
+        }
         // Pressures of fluid particles and (dummy model) boundary particles from the equation of state.
         // PCISPH's pressures come from its solve in the step; P.p keeps those of the last step taken (zero
         // before the first), which is what the record shows, and fill_rate_factors leaves them out of

@@ -252,6 +252,7 @@ double Simulation2D::step_pcisph(double dt, double t_after, bool adaptive, Windo
 
 double Simulation2D::take_step(double dt, double t_after, bool adaptive, WindowStats& ws) {
     step_dt_ = dt;
+    stepping_ = true;
     switch (s_.pressure == PressureModel::Pcisph ? Integrator::SymplecticEuler : s_.integrator) {
         case Integrator::SymplecticEuler:
             if (s_.pressure == PressureModel::Pcisph)
@@ -263,6 +264,7 @@ double Simulation2D::take_step(double dt, double t_after, bool adaptive, WindowS
         case Integrator::PredictorCorrector: step_predictor_corrector(dt, t_after); break;
     }
     ++st_.step;
+    stepping_ = false;
     // Velocity Verlet re-initialises inside its step, before its one evaluation (step_verlet).
     if (s_.integrator != Integrator::VelocityVerlet && reinitialisation_due(st_.step)) reinitialise_densities();
     const double rho_max = check_state();

@@ -85,6 +85,27 @@ TEST_SUITE("failure") {
         CHECK(msg.find("max_density_ratio") != std::string::npos);
     }
 
+    TEST_CASE("a summed density out of bounds is named with the step and time of the positions it was summed at") {
+        // Summed densities of the free surface's particles are low from the start (a truncated kernel sum, about
+        // 0.8 rho0 at the top corners): with min_density_ratio = 0.9 the state at t = 0 is out of bounds. The
+        // sums are made when the rates are evaluated, here at the start, which now checks them; before
+        // 2026-11-27 they were checked after the first step, and the message named step 1 and its end time
+        // for densities of t = 0.
+        std::string msg = "no error";
+        try {
+            auto s = start(with(wcsph(dam_break(0.1 / 16)), {{"density.method", "summation"},
+                                                             {"density.diffusion", "none"},
+                                                             {"failure.min_density_ratio", 0.9}}));
+            run(*s, 0.01, 0.01);
+        } catch (const sphfsi::protocol::SolverError& e) {
+            CHECK(e.code() == "diverged");
+            msg = e.what();
+        }
+        MESSAGE(msg);
+        CHECK(msg.find("step 0, t = 0 s: particle ") == 0);
+        CHECK(msg.find("below min_density_ratio") != std::string::npos);
+    }
+
     TEST_CASE("a speed bound is enforced") {
         // WCSPH with c0 = 10 sqrt(2 g H) = 19.8 m/s for the 0.2 m column; its surge front runs at about
         // 2 sqrt(g H) = 2.8 m/s in theory (Ritter), so a bound of 0.1 c0 = 1.98 m/s is crossed within the
