@@ -192,6 +192,10 @@ class Sweeper:
                 continue
             for k, v in vals.items():
                 row[f"{m['label']}.{k}"] = v
+            # A NaN becomes an empty cell: say why, as for a metric that failed (e.g. rel_error with exact = 0).
+            nan = [k for k, v in vals.items() if isinstance(v, float) and math.isnan(v)]
+            if nan:
+                notes.append(f"{m['label']}: {', '.join(nan)} not a number")
         row["notes"] = "; ".join(notes)
 
     def columns(self):

@@ -187,6 +187,21 @@ void set_attribute(hid_t object, const std::string& name, const std::string& val
     write_attribute(object, name, type.get(), type.get(), &p);
 }
 
+std::string string_attribute(hid_t object, const std::string& name) {
+    if (H5Aexists(object, name.c_str()) <= 0) return {};
+    Handle attr(H5Aopen(object, name.c_str(), H5P_DEFAULT), H5Aclose, "open attribute " + name);
+    Handle stored(H5Aget_type(attr.get()), H5Tclose, "type of attribute " + name);
+    if (H5Tget_class(stored.get()) != H5T_STRING || H5Tis_variable_str(stored.get()) <= 0) return {};
+    Handle type(H5Tcopy(H5T_C_S1), H5Tclose, "copy type");
+    H5Tset_size(type.get(), H5T_VARIABLE);
+    H5Tset_cset(type.get(), H5T_CSET_UTF8);
+    char* text = nullptr;
+    if (H5Aread(attr.get(), type.get(), &text) < 0 || !text) return {};
+    std::string out(text);
+    H5free_memory(text);
+    return out;
+}
+
 void set_attribute(hid_t object, const std::string& name, double value) {
     write_attribute(object, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &value);
 }

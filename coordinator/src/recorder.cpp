@@ -61,6 +61,14 @@ void write_value_attributes(hid_t object, const std::string& prefix, const Value
 }
 }  // namespace
 
+std::string record_status(const std::filesystem::path& file) {
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    const hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    if (f < 0) return {};
+    h5::Handle h(f, H5Fclose, "open " + file.string());
+    return h5::string_attribute(f, "status");
+}
+
 Recorder::Recorder(std::filesystem::path file, const RunMetadata& meta, std::optional<double> resume_at)
     : file_(std::move(file)) {
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // we report HDF5 failures ourselves

@@ -139,6 +139,12 @@ int Runner::execute() {
     std::optional<Checkpoint> resume;
     if (opt_.resume) {
         resume = read_checkpoint(opt_.out_dir / "checkpoint.bin");
+        // A completed run has nothing left: resuming it re-ran its tail from the last checkpoint.
+        if (record_status(opt_.out_dir / "record.h5") == "completed") {
+            std::cerr << "sphfsi: the run in " << opt_.out_dir.string()
+                      << " completed; there is nothing to resume (start a new run to change it)" << std::endl;
+            return 2;
+        }
         // The scene as the run saw it, not as the file may read now; paths stay relative to the original.
         scene_ = parse_scene(resume->scene_text, resume->scene_file, resume->overrides);
         t_ = resume->t;  // an interruption before INIT completes is reported at the checkpoint's time

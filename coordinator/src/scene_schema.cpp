@@ -184,9 +184,14 @@ schema::TableSchema scene_schema(const std::vector<std::string>& external) {
         if (const Value* p = t.find("participants"))
             for (const auto& [role, cmd] : p->as_table())
                 if (!t.contains(role)) e.add(&cmd, "key 'participants." + role + "': the scene has no [" + role + "] section");
-        if (const Value* c = t.find("coupling"))
-            if (c->at("window").as_string() == "fixed" && !c->contains("window_dt"))
+        if (const Value* c = t.find("coupling")) {
+            const bool fixed = c->at("window").as_string() == "fixed";
+            if (fixed && !c->contains("window_dt"))
                 e.add(c, "missing key 'coupling.window_dt'; required when coupling.window = \"fixed\"");
+            if (!fixed && c->contains("window_dt"))  // silently ignored, it would read as if it set the windows
+                e.add(&c->at("window_dt"), "key 'coupling.window_dt': used only with coupling.window = \"fixed\" (this "
+                                           "scene's is \"" + c->at("window").as_string() + "\"); remove it or set the window rule");
+        }
         check_watchpoint_names(t, e);
         check_across_sections(t, external, e);
     });

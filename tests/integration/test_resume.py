@@ -184,5 +184,16 @@ def test_a_fresh_run_leaves_nothing_of_an_earlier_run_to_resume():
     assert code == 1 and "no checkpoint at" in text, (code, text)
 
 
+def test_a_completed_run_is_not_resumed():
+    """A completed run has nothing left to resume; --resume once re-ran its tail from the last checkpoint and
+    rewrote the record (a review, 2026-11-27). Now it is refused, and the record is left as it was."""
+    out = harness.out_dir("resume-completed")
+    harness.sphfsi("run", SCENE, "--out", out, "--quiet", *SETTINGS, check=0, timeout=120)
+    before = os.path.getmtime(os.path.join(out, "record.h5"))
+    code, text = harness.sphfsi("run", "--resume", out, "--quiet", timeout=60)
+    assert code == 2 and "completed; there is nothing to resume" in text, (code, text)
+    assert os.path.getmtime(os.path.join(out, "record.h5")) == before
+
+
 if __name__ == "__main__":
     harness.main(globals())

@@ -108,6 +108,7 @@ MISTAKES_FOUND_LATE = [
     ("dam_break", ["fluid.pressure.gamma=1e300"], "key 'fluid.pressure.gamma': got 1e+300"),
     ("dam_break", ["fluid.tank={width=-1.0, height=0.5}"], "--set: key 'fluid.tank.width': got -1"),
     ("elastic_gate", ['participants.structure=" "'], "key 'participants.structure': empty"),
+    ("elastic_gate", ["coupling.window_dt=0.001"], "key 'coupling.window_dt': used only with coupling.window"),
 ]
 
 

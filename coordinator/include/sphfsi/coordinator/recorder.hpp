@@ -43,6 +43,9 @@ public:
     using std::runtime_error::runtime_error;
 };
 
+// The `status` attribute of the record at `file` ("completed", "running", ...); empty when unreadable.
+std::string record_status(const std::filesystem::path& file);
+
 class Recorder {
 public:
     // Creates `file` (replacing it), or with `resume_at` reopens it and drops everything after that time.
