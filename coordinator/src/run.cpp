@@ -410,9 +410,10 @@ void Runner::loop() {
                                   iface_.fluid_displacement);
         record_window(plan, o, wall, work);
         if (watchpoints_) watchpoints_->write(t_, iface_.displacement);
-        // After the window is recorded, so that a run stopped here keeps the window that stopped it.
-        if (!o.stop_run.empty()) throw std::runtime_error(o.stop_run);
+        // After the window is recorded, so that a run stopped here keeps the window that stopped it (and the
+        // root's interface totals, taken from the energy account, include it).
         if (coupled_) account_energy(energy_limits_, windows_, t_, o, work, iface_);
+        if (!o.stop_run.empty()) throw std::runtime_error(o.stop_run);
         progress_->update(t_, steps_);
         // Frames at k * output_interval, and the end's state whether or not end_time is one of those.
         if (t_ >= output_index_ * output_dt_ - eps || t_ >= end_ - eps) snapshot_all();

@@ -52,7 +52,8 @@ void Simulation2D::mark_escaped() {
 
 // Deeper inside a static obstacle than its wall layers reach from a face the water can touch: lost through
 // it, like a particle beyond a tank wall's outer face. A box thinner than two wall layers has no such depth, so
-// there it is more than half a spacing past its middle (it came through a face and is leaving by the other).
+// there it is within half a spacing of the box's middle: on its way through (a step moves a particle a small
+// fraction of a spacing, so one passing through lands in that band).
 // A face on a tank wall is not one the water can touch: a box standing on the floor counts from its others.
 bool Simulation2D::through_obstacle(const Box& b, const V& x) const {
     const auto& g = geometry_;
