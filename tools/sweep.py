@@ -326,6 +326,9 @@ def run_bisection(sweeper, selected):
     reference_rows = {}
     if reference is not None and any(metrics.METRICS[m["name"]].uses_reference for m in sw.metrics):
         selected = [t for t in selected if t is not reference]
+        if not selected:
+            print("bisection: the only run selected is the reference; nothing to bisect", file=sys.stderr)
+            return False
         print(f"bisection: the reference run {reference.label() or reference.id} first", flush=True)
         reference_rows[reference.id] = sweeper.execute(reference)
         print(f"[{reference.label() or 'reference'}] {reference_rows[reference.id].get('status')}", flush=True)

@@ -450,6 +450,85 @@ max_runs = 12
     print(f"newmark, corotational, P L^2/EI = 2: stable up to dt = {t:g} s, fails at {bad:g} s ({runs} runs)")
 
 
+def test_a_bisection_bounded_by_a_reference_metric_sees_the_reference_run():
+    """fail_if on a metric against the reference run (docs/sweeps.md's own [bisect] example): the reference
+    runs first and every probe's metrics see it. Before 2026-11-27 each probe saw only itself, every probe
+    failed with 'no reference run', and the bisection reported that neither end passes."""
+    d = harness.out_dir("sweep-bisect-reference")
+    path = write(os.path.join(d, "bisect.toml"), f'''
+[sweep]
+scene = "{BEAM}"
+timeout_s = 60
+threads_per_run = 1
+
+[fixed]
+"run.end_time" = 0.05
+"structure.time.resolved_modes" = 1
+"structure.time.steps_per_period" = 2
+"structure.time.max_numerical_damping" = 0.5
+
+[grid]
+"structure.time.integrator" = ["backward_euler", "generalized_alpha"]
+
+[[case]]
+name = "reference"
+reference = true
+set = {{ "structure.time.integrator" = "newmark", "structure.time.dt_max" = 1e-5 }}
+
+[[metric]]
+name = "watchpoint_vs_reference_run"
+label = "tip"
+watchpoint = "tip"
+
+[bisect]
+key = "structure.time.dt_max"
+low = 1e-4
+high = 1e-2
+rel_tol = 0.3
+max_runs = 8
+fail_if = {{ "tip.max_rel" = 0.05 }}
+''')
+    out = os.path.join(d, "out")
+    rc, text = sweep(path, "--out", out)
+    print(text)
+    assert rc == 0 and "the reference run reference first" in text, text
+    with open(os.path.join(out, "probes.csv")) as f:
+        probes = list(csv.DictReader(f))
+    assert probes and not any("no reference run" in p["reason"] for p in probes), probes
+    assert all(p["tip.max_rel"] for p in probes if p["status"] == "completed"), probes
+    assert any(p["passed"] == "true" for p in probes), probes
+    # An accuracy limit found through the reference: larger steps fail on the metric, not on completing.
+    assert any(p["passed"] == "false" and p["status"] == "completed" and "tip.max_rel" in p["reason"] for p in probes), probes
+
+
+def test_resume_reruns_a_timeout_under_a_longer_limit():
+    """--resume keeps finished runs, but a run that timed out under a shorter limit than today's is run again
+    (it was kept as a timeout for ever, and --check then failed on a limit already raised)."""
+    d = harness.out_dir("sweep-resume-timeout")
+    body = f'''
+[sweep]
+scene = "{BEAM}"
+timeout_s = TIMEOUT
+grace_s = 5
+threads_per_run = 1
+
+[fixed]
+"run.end_time" = 0.05
+
+[[case]]
+name = "beam"
+'''
+    path = os.path.join(d, "s.toml")
+    out = os.path.join(d, "out")
+    write(path, body.replace("TIMEOUT", "0.01"))
+    sweep(path, "--out", out, "--no-charts")
+    assert [r["status"] for r in rows_of(out)] == ["timeout"], rows_of(out)
+    write(path, body.replace("TIMEOUT", "60"))
+    rc, text = sweep(path, "--out", out, "--no-charts", "--resume")
+    assert rc == 0 and [r["status"] for r in rows_of(out)] == ["completed"], (text, rows_of(out))
+    assert "(kept)" not in text, text
+
+
 def test_integer_bisection_upwards():
     """Newton's iteration cap: too few iterations fail, so the smallest passing value is sought."""
     d = harness.out_dir("sweep-bisect-int")
