@@ -327,11 +327,18 @@ def run_bisection(sweeper, selected):
     if reference is not None and any(metrics.METRICS[m["name"]].uses_reference for m in sw.metrics):
         selected = [t for t in selected if t is not reference]
         if not selected:
-            print("bisection: the only run selected is the reference; nothing to bisect", file=sys.stderr)
-            return False
+            sys.exit("sweep: the only run selected is the reference; nothing to bisect")
         print(f"bisection: the reference run {reference.label() or reference.id} first", flush=True)
-        reference_rows[reference.id] = sweeper.execute(reference)
-        print(f"[{reference.label() or 'reference'}] {reference_rows[reference.id].get('status')}", flush=True)
+        try:
+            reference_rows[reference.id] = sweeper.execute(reference)
+        except KeyboardInterrupt:
+            print("sweep: interrupted during the reference run", file=sys.stderr, flush=True)
+            return True
+        status = reference_rows[reference.id].get("status")
+        print(f"[{reference.label() or 'reference'}] {status}", flush=True)
+        if status != "completed":  # every probe would fail for want of it, which reads as 'neither end passes'
+            sys.exit(f"sweep: the reference run did not complete ({status}: "
+                     f"{reference_rows[reference.id].get('message') or ''}); nothing to bisect against")
     probes = {r.id: [] for r in selected}
     summaries = {}
     print(f"bisection on {key} in [{cfg['low']}, {cfg['high']}] ({cfg['scale']}"

@@ -118,6 +118,8 @@ Checkpoint read_checkpoint(const std::filesystem::path& file) {
             c.states[m.ptr[k].key.as<std::string>()] = std::vector<std::uint8_t>(p, p + bin.size);
         }
         if (a.size > 14) {
+            if (a.ptr[14].type != msgpack::type::ARRAY || a.ptr[14].via.array.size != 2)
+                throw std::runtime_error("the loop times are not an array of two numbers");
             const auto& loop = a.ptr[14].via.array;
             c.loop_wall_s = loop.ptr[0].as<double>();
             c.loop_cpu_s = loop.ptr[1].as<double>();

@@ -51,19 +51,22 @@ void Simulation2D::mark_escaped() {
 }
 
 // Deeper inside a static obstacle than its wall layers reach from a face the water can touch: lost through
-// it, like a particle beyond a tank wall's outer face. A box thinner than two wall layers has no such depth, so
-// there it is within half a spacing of the box's middle: on its way through (a step moves a particle a small
-// fraction of a spacing, so one passing through lands in that band).
-// A face on a tank wall is not one the water can touch: a box standing on the floor counts from its others.
+// it, like a particle beyond a tank wall's outer face. Each axis has its own depth: along a side thinner than
+// two wall layers, no centre gets that deep, so there it is within half a spacing of the box's middle, and at
+// least half a spacing past the face (a step moves a particle a small fraction of a spacing, so one passing
+// through lands in that band; without the repulsive force centres sit up to 0.43 dp past a surface, and a
+// side no thicker than dp is not checked). A face on a tank wall is not one the water can touch: a box
+// standing on the floor counts from its others.
 bool Simulation2D::through_obstacle(const Box& b, const V& x) const {
     const auto& g = geometry_;
     const double tol = 1e-9 * std::max(g.width, g.height);
-    const double d = std::min(g.thickness, std::max(0.0, 0.5 * (std::min(b.width, b.height) - s_.dp)));
+    auto depth = [&](double side) { return std::min(g.thickness, std::max(0.5 * (side - s_.dp), 0.5 * s_.dp)); };
+    const double dx = depth(b.width), dy = depth(b.height);
     const double inf = std::numeric_limits<double>::infinity();
-    const double x_lo = g.walls_x && b.x0 <= tol ? -inf : b.x0 + d;
-    const double x_hi = g.walls_x && b.x0 + b.width >= g.width - tol ? inf : b.x0 + b.width - d;
-    const double y_lo = g.floor && b.y0 <= tol ? -inf : b.y0 + d;
-    const double y_hi = g.lid && b.y0 + b.height >= g.height - tol ? inf : b.y0 + b.height - d;
+    const double x_lo = g.walls_x && b.x0 <= tol ? -inf : b.x0 + dx;
+    const double x_hi = g.walls_x && b.x0 + b.width >= g.width - tol ? inf : b.x0 + b.width - dx;
+    const double y_lo = g.floor && b.y0 <= tol ? -inf : b.y0 + dy;
+    const double y_hi = g.lid && b.y0 + b.height >= g.height - tol ? inf : b.y0 + b.height - dy;
     // The open sides extend the box only as far as the wall beside it: beyond, the tank's own checks apply.
     const bool inside_x = x[0] > x_lo && x[0] < x_hi && x[0] > -g.thickness && x[0] < g.width + g.thickness;
     const bool inside_y = x[1] > y_lo && x[1] < y_hi && x[1] > -g.thickness && x[1] < g.height + g.thickness;

@@ -48,6 +48,8 @@ void Simulation2D::save() {
 void Simulation2D::restore() {
     if (!has_saved_) throw SolverError("bad_state", "RESTORE before any SAVE");
     st_ = saved_;
+    stepping_ = false;  // a step that failed part-way left its marks; the saved state is between steps
+    density_dt_at_evaluation_ = 0.0;
     sort_particles();  // the grid belongs to the state it was built for; the saved particles are already in cell order
 }
 

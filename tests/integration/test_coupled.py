@@ -82,6 +82,7 @@ def test_messaging_is_timed_to_each_replys_arrival_under_parallel_explicit():
         assert 0 <= a["messaging_and_waiting_s"] <= a["wall_s"], (a["messaging_and_waiting_s"], a["wall_s"])
         w = f["windows"]
         assert (w["structure_roundtrip_s"][:] <= w["wall_s"][:] + 1e-9).all()
+        assert (w["messaging_s"][:] <= w["wall_s"][:] + 1e-9).all()  # the overlapping waits counted once
 
 
 def shared_sections(path):
@@ -316,6 +317,15 @@ def test_no_sliver_of_a_window_before_an_output_time():
     assert dt1 >= 0.5e-3 * (1 - 1e-9), dt1
     assert created1 <= 1.01 * created0, (created1, created0)
     assert abs(deflection1 - deflection0) <= 1e-4 * abs(deflection0), (deflection1, deflection0)
+    # Two stops a hair apart (an output time just before the end) are one: no window of 1e-11 s between them,
+    # and one frame there, not two (a review of the fix above found both).
+    out = harness.out_dir("sliver-end")
+    harness.sphfsi("run", scene, "--out", out, "--quiet", "--set", "coupling.window=fixed", "--set",
+                   "coupling.window_dt=1e-3", "--set", "coupling.predictor=quadratic", "--set",
+                   "run.output_interval=0.01", "--set", "run.end_time=0.01000000001", check=0, timeout=120)
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert f["windows/dt"][:].min() >= 1e-3 * (1 - 1e-6), f["windows/dt"][-3:]
+        assert len(f["frames/fluid/time"]) == 2, f["frames/fluid/time"][:]
 
 
 def quad_distance(p, quad):

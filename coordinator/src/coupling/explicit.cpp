@@ -70,6 +70,7 @@ public:
         auto fseq = session_.start_advance("fluid", p.t, p.dt, p.fluid_substeps, 0, kinematics(d, v));
         auto sseq = session_.start_advance("structure", p.t, p.dt, p.structure_substeps, 0, Fields{{"force", s.force}});
         WindowOutcome o;
+        o.concurrent = true;
         o.fluid = session_.finish_advance("fluid", fseq);
         o.structure = session_.finish_advance("structure", sseq);
         o.structure_force = s.force;  // the window-start force it was sent

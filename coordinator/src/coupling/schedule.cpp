@@ -16,13 +16,14 @@ Schedule::Schedule(const Value& c)
       one_structure_step_(c.at("structure_steps").as_string() == "window") {}
 
 void land_on_stop(WindowPlan& p, double t_stop) {
-    // Take what is left when it is one window within round-off; split it into two equal windows when one
+    // Take what is left when it is one window to within 1e-6 of it; split it into two equal windows when one
     // window would leave less than a quarter of a window after it. That sliver had been a window of its own,
     // down to 1e-11 s: the fluid's force over it was 25 times the force around it, and the quadratic
     // predictor, which divides by the last window's length, then created energy at the interface (a review,
-    // 2026-11-27). Neither ever makes a window longer than wanted (beyond round-off).
+    // 2026-11-27). Neither ever makes a window longer than wanted by more than 1e-6 of it.
     const double wanted = p.dt, left = t_stop - p.t;
-    if (wanted >= left * (1 - 1e-12))
+    p.wanted = wanted;
+    if (wanted >= left * (1 - 1e-6))
         p.dt = left;
     else if (left - wanted < 0.25 * wanted)
         p.dt = 0.5 * left;

@@ -19,6 +19,7 @@ struct WindowPlan {
     std::uint32_t fluid_substeps = 0, structure_substeps = 0;  // 0 = participant chooses (adaptive)
     WindowRule rule = WindowRule::Thesis;
     bool clipped = false;  // shortened to land on an output time or the end
+    double wanted = 0.0;   // the window its rule wanted, before landing on a stop
 };
 
 // Shortens p.dt (from p.t) so that the windows land exactly on t_stop without a sliver of a window before
@@ -45,6 +46,7 @@ struct WindowOutcome {
     // parallel-explicit of the last one (the interface energy balance needs it).
     protocol::F64Array structure_force;
     std::uint32_t iterations = 1;  // coupling iterations (1 for explicit schemes)
+    bool concurrent = false;       // both sides advanced at once (parallel-explicit): their waits overlap
     double residual = 0.0;         // final interface displacement residual norm [m] (0 for explicit)
     bool converged = true;
     // Set when the window must end the run (coupling.on_max_iterations = "error"): the loop records the
