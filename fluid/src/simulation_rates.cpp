@@ -280,11 +280,20 @@ void Simulation2D::reduce_rates() {
         rho_max = std::max(rho_max, P.rho[i]);
     }
     if (!finite) {
+        // A NaN born in a wall or solid particle (its extrapolated pressure, a solid's velocity) reaches the
+        // fluid through the rates: which came first cannot be told afterwards, so the fluid particle is named
+        // with the first boundary particle that is not finite either.
+        std::string also;
+        for (std::size_t i = 0; i < P.size() && also.empty(); ++i)
+            if (is_boundary(P.kind[i]) && !(std::isfinite(P.p[i]) && std::isfinite(P.rho[i]) && all_finite(P.v[i])))
+                also = "; " + std::string(P.kind[i] == Kind::Wall ? "wall" : "solid") + " particle " + std::to_string(P.id[i]) +
+                       " has a non-finite " + (!std::isfinite(P.p[i]) ? "pressure" : !std::isfinite(P.rho[i]) ? "density" : "velocity") +
+                       " too";
         for (std::size_t i = 0; i < P.size(); ++i) {
             if (P.kind[i] != Kind::Fluid) continue;
-            if (!all_finite(P.a[i])) fail(i, "acceleration", norm(P.a[i]), "not finite");
-            if (!all_finite(P.v[i])) fail(i, "velocity", norm(P.v[i]), "not finite");
-            if (!std::isfinite(P.rho[i])) fail(i, "density", P.rho[i], "not finite");
+            if (!all_finite(P.a[i])) fail(i, "acceleration", norm(P.a[i]), "not finite" + also);
+            if (!all_finite(P.v[i])) fail(i, "velocity", norm(P.v[i]), "not finite" + also);
+            if (!std::isfinite(P.rho[i])) fail(i, "density", P.rho[i], "not finite" + also);
         }
     }
     st_.a_max = std::sqrt(a2);
