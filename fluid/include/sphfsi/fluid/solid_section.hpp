@@ -4,9 +4,8 @@
 // reach from a face the water touches (an edge no other cell shares) has gone through the structure's wall,
 // as one beyond a tank wall's outer face has gone through that; across a section thinner than two of those
 // layers, that is within half a spacing of its middle and at least half a spacing past the face (the rule
-// of the static obstacles, Simulation2D::through_obstacle). Measured with docs/validation/
-// section_penetration.py (frames every 2 ms) in the coupled scenes at their defaults (elastic gate at 1 mm,
-// and at 3 and 4 mm with thesis windows; elastic obstacle at 4 mm; hydrostatic plate): no fluid centre ever
+// of the static obstacles, Simulation2D::through_obstacle). Measured in the coupled scenes at their
+// defaults (elastic gate at 1 and 4 mm, elastic obstacle at 4 mm, hydrostatic plate): no fluid centre ever
 // inside a cross-section; the gate at 3 mm without the repulsive force put one at its middle at t = 0.38 s.
 #include <array>
 #include <cstdint>
