@@ -96,7 +96,6 @@ void Simulation2D::check_summed_densities() const {
 
 double Simulation2D::check_state() {
     mark_escaped();
-    if (section_.on()) section_.place(st_.t);
     const auto& P = st_.P;
     const auto& g = geometry_;
     const double lo = s_.min_density_ratio * s_.rho0, hi = s_.max_density_ratio * s_.rho0;
@@ -115,7 +114,6 @@ double Simulation2D::check_state() {
         if (g.lid && x[1] > g.height + g.thickness) return true;
         for (const Box& b : g.obstacles)
             if (through_obstacle(b, x)) return true;
-        if (section_.on() && section_.lost(x)) return true;
         return false;
     };
 #pragma omp parallel for schedule(static) reduction(|| : bad) reduction(max : rho_max)
@@ -143,9 +141,6 @@ double Simulation2D::check_state() {
     if (g.walls_x && x[0] > g.width + g.thickness) fail(i, "x", x[0], "beyond the outer face of the right wall at x = " + fmt(g.width + g.thickness) + " m, at y = " + fmt(x[1]) + " m: lost through the wall");
     if (g.floor && x[1] < -g.thickness) fail(i, "y", x[1], "below the outer face of the floor at y = " + fmt(-g.thickness) + " m: lost through the wall");
     if (g.lid && x[1] > g.height + g.thickness) fail(i, "y", x[1], "above the outer face of the lid at y = " + fmt(g.height + g.thickness) + " m: lost through the wall");
-    if (section_.on() && section_.lost(x))
-        fail(i, "position", x[0], "inside the structure's cross-section, deeper than its solid particles reach from its faces: "
-                                  "lost through it (y = " + fmt(x[1]) + " m)");
     fail(i, "position", x[0], "inside an obstacle, deeper than its wall layers: lost through the wall (y = " + fmt(x[1]) + " m)");
 }
 

@@ -195,13 +195,6 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
                 }
                 return false;
             });
-        std::vector<std::array<std::int32_t, 4>> cells(mesh.cells.rows());
-        for (std::size_t c = 0; c < cells.size(); ++c)
-            for (int k = 0; k < 4; ++k)
-                cells[c][static_cast<std::size_t>(k)] = mesh.cells(c, static_cast<std::uint64_t>(k));
-        sim_->set_solid_section(SolidSection(
-            std::move(cells), [coupling](double t, std::vector<Vec2>& out) { coupling->vertex_positions(t, out); },
-            static_cast<double>(settings_.wall_layers) * settings_.dp, settings_.dp));
     }
     if (saved) {
         try {

@@ -3,12 +3,10 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <string>
 
 #include "run_helpers.hpp"
-#include "sphfsi/fluid/solid_section.hpp"
 #include "scenes.hpp"
 
 using namespace fluid_test;
@@ -181,41 +179,6 @@ TEST_SUITE("failure") {
         // The same at mid-height, which was caught before too.
         msg = thrown(tank(0.04, 0.015), 0.0212);
         CHECK(msg.find("inside an obstacle") != std::string::npos);
-    }
-
-    TEST_CASE("a fluid centre deep in a coupled structure's cross-section is lost through it") {
-        using sphfsi::fluid::SolidSection;
-        using sphfsi::fluid::Vec2;
-        // A plate of 4 cells along x, 0.1 m long, `thick` thick from y = 0, displaced by `lift` at t = 1 s.
-        auto plate = [](double thick, double lift) {
-            std::vector<std::array<std::int32_t, 4>> cells;
-            for (int i = 0; i < 4; ++i) cells.push_back({i, i + 1, 5 + i + 1, 5 + i});
-            auto vertices = [thick, lift](double t, std::vector<Vec2>& out) {
-                out.clear();
-                for (int row = 0; row < 2; ++row)
-                    for (int i = 0; i <= 4; ++i) out.push_back(Vec2{{0.025 * i, row * thick + lift * t}});
-            };
-            return SolidSection(cells, vertices, 0.012, 0.004);  // 3 layers of dp = 4 mm
-        };
-        // Thin (5 mm, under two layers): lost within dp/2 of the middle only, at least dp/2 past a face.
-        SolidSection thin = plate(0.005, 0.0);
-        thin.place(0.0);
-        CHECK_FALSE(thin.lost(Vec2{{0.05, 0.0015}}));   // 0.4 dp past the face: where centres get without repulsion
-        CHECK(thin.lost(Vec2{{0.05, 0.0025}}));         // the middle
-        CHECK_FALSE(thin.lost(Vec2{{0.05, 0.006}}));    // outside
-        CHECK_FALSE(thin.lost(Vec2{{0.11, 0.0025}}));   // beyond its end
-        // The end faces count too: the middle, 1 mm from the end, is not deep.
-        CHECK_FALSE(thin.lost(Vec2{{0.099, 0.0025}}));
-        // Thick (40 mm): lost deeper than the three layers (12 mm) from the nearest face.
-        SolidSection thick = plate(0.04, 0.0);
-        thick.place(0.0);
-        CHECK_FALSE(thick.lost(Vec2{{0.05, 0.011}}));
-        CHECK(thick.lost(Vec2{{0.05, 0.02}}));
-        // It follows the structure: lifted by 0.1 m at t = 1 s.
-        SolidSection moving = plate(0.005, 0.1);
-        moving.place(1.0);
-        CHECK(moving.lost(Vec2{{0.05, 0.1025}}));
-        CHECK_FALSE(moving.lost(Vec2{{0.05, 0.0025}}));
     }
 
     TEST_CASE("a tank periodic in y has no brim: a particle through its side wall is lost, not escaped") {

@@ -16,7 +16,6 @@
 #include "sphfsi/fluid/pcisph.hpp"
 #include "sphfsi/fluid/scene_setup.hpp"
 #include "sphfsi/fluid/settings.hpp"
-#include "sphfsi/fluid/solid_section.hpp"
 #include "sphfsi/fluid/state_io.hpp"
 #include "sphfsi/fluid/surface_stress.hpp"
 #include "sphfsi/fluid/time_step.hpp"
@@ -48,8 +47,6 @@ public:
     void add_solids(const std::vector<V>& reference, const std::vector<V>& at_start, SolidKinematics kinematics,
                     const std::function<bool(const V&)>& inside_solid);
     void set_solid_kinematics(SolidKinematics kinematics) { kinematics_ = std::move(kinematics); }
-    // The coupled structure's cross-section, for the check that no fluid goes through it (solid_section.hpp).
-    void set_solid_section(SolidSection section) { section_ = std::move(section); }
 
     // Advances to t_end: substeps == 0 adaptive steps landing exactly on t_end, else that many equal steps.
     // on_step is called after every step (progress). Throws protocol::SolverError on failure.
@@ -190,7 +187,6 @@ private:
     CellGrid<Dim> grid_;
     V domain_lo_, domain_hi_;
     SolidKinematics kinematics_;
-    SolidSection section_;
     std::vector<V> solid_acc_;  // kinematic acceleration by solid index (Adami's a_w)
     std::vector<V> solid_xv_;   // scratch of refresh_solid_rates: solid positions and velocities
     std::vector<std::uint8_t> near_solid_;  // scratch of refresh_solid_rates: particles whose rates see a solid

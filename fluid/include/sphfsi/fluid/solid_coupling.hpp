@@ -42,8 +42,6 @@ public:
 
     // Position, velocity and acceleration of solid particle k at time t (inside the current window).
     void kinematics(std::size_t k, double t, Vec2& x, Vec2& v, Vec2& a) const;
-    // The vertices' positions at time t, as kinematics() places the particles.
-    void vertex_positions(double t, std::vector<Vec2>& out) const;
 
     // F_v = sum_p w_pv f_p, shape (n_vertices, 2).
     static protocol::F64Array map_forces(const std::vector<SolidParticleWeights>& weights,
