@@ -321,6 +321,12 @@ def participant_info(run_dir, params, context):
     return _errors(value, _exact(params, context))
 
 
+def windows_after(window_end, t_start):
+    """Which windows (by their end times) end after t_start: one ending at t_start lies wholly before it.
+    A relative 1e-12 is allowed for round-off in the recorded times."""
+    return window_end > float(t_start) * (1 + 1e-12)
+
+
 @metric("window_stat", dict(column=REQUIRED, reduce="max", absolute=False, t_start=None, t_end=None),
         {"value": ("the reduced /windows column", "as the column")}, ("value",))
 def window_stat(run_dir, params, context):
@@ -336,7 +342,7 @@ def window_stat(run_dir, params, context):
         t = w["t"][:]
     keep = np.ones(x.shape, dtype=bool)
     if params.get("t_start") is not None:
-        keep &= t > float(params["t_start"]) * (1 + 1e-12)
+        keep &= windows_after(t, params["t_start"])
     if params.get("t_end") is not None:
         keep &= t <= float(params["t_end"]) * (1 + 1e-12)
     x = x[keep]
@@ -383,7 +389,7 @@ def max_density_error(run_dir, params, context):
         if col is not None and params["source"] != "frames":
             per = np.abs(w[col][:])
             if t_start is not None:
-                per = per[w["t"][:] > float(t_start) * (1 + 1e-12)]
+                per = per[windows_after(w["t"][:], t_start)]
         else:
             g = f.get("frames/fluid")
             if g is None or "density" not in g or "kind" not in g:

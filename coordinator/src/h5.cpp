@@ -146,10 +146,18 @@ void flush(hid_t file) {
                                  "); it holds everything written before");
 }
 
-void write_string(hid_t parent, const std::string& name, const std::string& text) {
+namespace {
+// The type of the record's strings (datasets and attributes): variable-length UTF-8.
+Handle utf8_string_type() {
     Handle type(H5Tcopy(H5T_C_S1), H5Tclose, "copy type");
     H5Tset_size(type.get(), H5T_VARIABLE);
     H5Tset_cset(type.get(), H5T_CSET_UTF8);
+    return type;
+}
+}  // namespace
+
+void write_string(hid_t parent, const std::string& name, const std::string& text) {
+    const Handle type = utf8_string_type();
     Handle space(H5Screate(H5S_SCALAR), H5Sclose, "create space");
     create_groups(parent, parent_of(name));
     Handle ds(H5Dcreate2(parent, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
@@ -180,9 +188,7 @@ void write_attribute(hid_t object, const std::string& name, hid_t file_type, hid
 }  // namespace
 
 void set_attribute(hid_t object, const std::string& name, const std::string& value) {
-    Handle type(H5Tcopy(H5T_C_S1), H5Tclose, "copy type");
-    H5Tset_size(type.get(), H5T_VARIABLE);
-    H5Tset_cset(type.get(), H5T_CSET_UTF8);
+    const Handle type = utf8_string_type();
     const char* p = value.c_str();
     write_attribute(object, name, type.get(), type.get(), &p);
 }
@@ -192,9 +198,7 @@ std::string string_attribute(hid_t object, const std::string& name) {
     Handle attr(H5Aopen(object, name.c_str(), H5P_DEFAULT), H5Aclose, "open attribute " + name);
     Handle stored(H5Aget_type(attr.get()), H5Tclose, "type of attribute " + name);
     if (H5Tget_class(stored.get()) != H5T_STRING || H5Tis_variable_str(stored.get()) <= 0) return {};
-    Handle type(H5Tcopy(H5T_C_S1), H5Tclose, "copy type");
-    H5Tset_size(type.get(), H5T_VARIABLE);
-    H5Tset_cset(type.get(), H5T_CSET_UTF8);
+    const Handle type = utf8_string_type();
     char* text = nullptr;
     if (H5Aread(attr.get(), type.get(), &text) < 0 || !text) return {};
     std::string out(text);

@@ -6,18 +6,14 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
+#include <vector>
+
+#include "number_text.hpp"
 
 namespace sphfsi::coordinator {
 namespace {
 
 using schema::Errors;
-
-std::string show(double x) {
-    std::ostringstream s;
-    s << x;
-    return s.str();
-}
 
 // A wetted member's published cross-section: the rectangle [0, L] along its axis by [-right, left] across
 // it, as structure/src/interface.cpp lays out its face vertices (faces at t/2 plus the padding).
@@ -66,9 +62,9 @@ void check_structure_in_tank(const Value& fluid, const std::vector<WettedMember>
         for (const auto& [x, y] : m.corners())
             if (x < -wall || x > W + wall || y < -wall || y > H + wall) {
                 e.add(&fluid.at("tank"), "key 'structure.members[" + std::to_string(m.index) + "]': its wetted cross-section reaches (" +
-                                             show(x) + ", " + show(y) + ") m, outside the tank and its walls (x in [" +
-                                             show(-wall) + ", " + show(W + wall) + "], y in [" + show(-wall) + ", " +
-                                             show(H + wall) + "] m); fluid.tank and the structure's geometry disagree");
+                                             shortest(x) + ", " + shortest(y) + ") m, outside the tank and its walls (x in [" +
+                                             shortest(-wall) + ", " + shortest(W + wall) + "], y in [" + shortest(-wall) + ", " +
+                                             shortest(H + wall) + "] m); fluid.tank and the structure's geometry disagree");
                 break;
             }
 }
@@ -88,8 +84,8 @@ void check_watchpoints(const Value& points, const std::vector<WettedMember>& wet
         for (const WettedMember& m : wetted)
             if (m.distance(x, y) < nearest->distance(x, y)) nearest = &m;
         if (nearest->distance(x, y) > nearest->cell_size())
-            e.add(&w, key + ": (" + show(x) + ", " + show(y) + ") m lies " + show(nearest->distance(x, y)) +
-                          " m from the wetted structure; allowed: within one interface cell (" + show(nearest->cell_size()) +
+            e.add(&w, key + ": (" + shortest(x) + ", " + shortest(y) + ") m lies " + shortest(nearest->distance(x, y)) +
+                          " m from the wetted structure; allowed: within one interface cell (" + shortest(nearest->cell_size()) +
                           " m) of it");
     }
 }

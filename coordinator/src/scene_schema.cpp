@@ -2,8 +2,8 @@
 // solver libraries' schemas (so a scene is checked completely before any process starts).
 #include <algorithm>
 #include <cctype>
-#include <sstream>
 
+#include "number_text.hpp"
 #include "sphfsi/coordinator/scene.hpp"
 #include "sphfsi/coordinator/scene_cross_checks.hpp"
 #include "sphfsi/fluid/schema.hpp"
@@ -11,12 +11,6 @@
 
 namespace sphfsi::coordinator {
 namespace {
-
-std::string shortest(double x) {
-    std::ostringstream s;
-    s << x;
-    return s.str();
-}
 
 void run_section(schema::TableSchema& s) {
     auto& run = s.table("run", "How long to run, how often to record, and how patient to be with participants.", true);

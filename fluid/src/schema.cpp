@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <string>
 
+#include "format.hpp"
 #include "sphfsi/fluid/footprint.hpp"
 #include "sphfsi/fluid/kernel_names.hpp"
 
@@ -19,13 +20,6 @@ using sphfsi::schema::TableSchema;
 std::string key(const std::string& path, const std::string& name) { return path.empty() ? name : path + "." + name; }
 
 double num(const Value& t, std::string_view k) { return t.at(k).as_double(); }
-
-// A length in a message, as short as it reads (std::to_string prints 1e300 with 300 digits).
-std::string show(double x) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.6g", x);
-    return buf;
-}
 
 // Walls thicker than this are a typo: the widest support allowed, the Gaussian's 3 h at h_over_dp = 8/3, fits.
 constexpr int kMaxWallLayers = 8;
@@ -52,12 +46,12 @@ void check_boxes_inside_tank(const Value& fluid, const std::string& path, Errors
                                    "] m does not lie inside the tank [0, " + std::to_string(W) + "] x [0, " +
                                    std::to_string(H) + "] m");
             if (w < dp * (1 - 1e-9) || h < dp * (1 - 1e-9))
-                errors.add(&b, "key '" + where + "': the box is thinner than one particle spacing dp = " + show(dp) + " m");
+                errors.add(&b, "key '" + where + "': the box is thinner than one particle spacing dp = " + fmt(dp) + " m");
         }
     }
     if (W < dp * (1 - 1e-9) || H < dp * (1 - 1e-9))
-        errors.add(&fluid.at("dp"), "key '" + key(path, "dp") + "': " + show(dp) + " m is more than the tank's " +
-                                        (W < H ? "width" : "height") + " (" + show(std::min(W, H)) +
+        errors.add(&fluid.at("dp"), "key '" + key(path, "dp") + "': " + fmt(dp) + " m is more than the tank's " +
+                                        (W < H ? "width" : "height") + " (" + fmt(std::min(W, H)) +
                                         " m); allowed: at most the tank's smaller side");
     const Value* water = fluid.find("water");
     if (!water) return;

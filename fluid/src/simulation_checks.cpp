@@ -73,40 +73,45 @@ bool Simulation2D::through_obstacle(const Box& b, const V& x) const {
     return inside_x && inside_y;
 }
 
+bool Simulation2D::density_in_bounds(double rho) const {
+    return rho >= s_.min_density_ratio * s_.rho0 && rho <= s_.max_density_ratio * s_.rho0;  // false for NaN
+}
+
+void Simulation2D::fail_density(std::size_t i) const {
+    const double rho = st_.P.rho[i], lo = s_.min_density_ratio * s_.rho0, hi = s_.max_density_ratio * s_.rho0;
+    if (!std::isfinite(rho)) fail(i, "density", rho, "not finite");
+    if (rho < lo) fail(i, "density", rho, "below min_density_ratio * rho0 = " + fmt(lo) + " kg/m^3");
+    fail(i, "density", rho, "above max_density_ratio * rho0 = " + fmt(hi) + " kg/m^3");
+}
+
 void Simulation2D::check_summed_densities() const {
     const auto& P = st_.P;
-    const double lo = s_.min_density_ratio * s_.rho0, hi = s_.max_density_ratio * s_.rho0;
     const long long n = static_cast<long long>(P.size());
     bool bad = false;
 #pragma omp parallel for schedule(static) reduction(|| : bad)
     for (long long q = 0; q < n; ++q) {
         const std::size_t i = static_cast<std::size_t>(q);
-        bad = bad || (P.kind[i] == Kind::Fluid && !(P.rho[i] >= lo && P.rho[i] <= hi));
+        bad = bad || (P.kind[i] == Kind::Fluid && !density_in_bounds(P.rho[i]));
     }
     if (!bad) return;
     std::size_t worst = P.size();  // the lowest id, as check_state names it
     for (std::size_t i = 0; i < P.size(); ++i)
-        if (P.kind[i] == Kind::Fluid && !(P.rho[i] >= lo && P.rho[i] <= hi) && (worst == P.size() || P.id[i] < P.id[worst]))
+        if (P.kind[i] == Kind::Fluid && !density_in_bounds(P.rho[i]) && (worst == P.size() || P.id[i] < P.id[worst]))
             worst = i;
-    const double rho = P.rho[worst];
-    if (!std::isfinite(rho)) fail(worst, "density", rho, "not finite");
-    if (rho < lo) fail(worst, "density", rho, "below min_density_ratio * rho0 = " + fmt(lo) + " kg/m^3");
-    fail(worst, "density", rho, "above max_density_ratio * rho0 = " + fmt(hi) + " kg/m^3");
+    fail_density(worst);
 }
 
 double Simulation2D::check_state() {
     mark_escaped();
     const auto& P = st_.P;
     const auto& g = geometry_;
-    const double lo = s_.min_density_ratio * s_.rho0, hi = s_.max_density_ratio * s_.rho0;
     const double v_cap = s_.max_mach * c0_;  // 0: no reference speed (PCISPH without gravity or u_max)
     bool bad = false;
     double rho_max = 0.0;
     const long long n = static_cast<long long>(P.size());
     auto broken = [&](std::size_t i) {
         const V& x = P.x[i];
-        if (!all_finite(x) || !all_finite(P.v[i]) || !std::isfinite(P.rho[i])) return true;
-        if (P.rho[i] < lo || P.rho[i] > hi) return true;
+        if (!all_finite(x) || !all_finite(P.v[i]) || !density_in_bounds(P.rho[i])) return true;
         if (v_cap > 0.0 && dot(P.v[i], P.v[i]) > v_cap * v_cap) return true;
         // mark_escaped has taken every particle that left over a side wall; beyond one now is through it.
         if (g.walls_x && (x[0] < -g.thickness || x[0] > g.width + g.thickness)) return true;
@@ -132,9 +137,7 @@ double Simulation2D::check_state() {
     const V& x = P.x[i];
     if (!all_finite(x)) fail(i, "position", std::isfinite(x[0]) ? x[1] : x[0], "not finite");
     if (!all_finite(P.v[i])) fail(i, "velocity", norm(P.v[i]), "not finite");
-    if (!std::isfinite(P.rho[i])) fail(i, "density", P.rho[i], "not finite");
-    if (P.rho[i] < lo) fail(i, "density", P.rho[i], "below min_density_ratio * rho0 = " + fmt(lo) + " kg/m^3");
-    if (P.rho[i] > hi) fail(i, "density", P.rho[i], "above max_density_ratio * rho0 = " + fmt(hi) + " kg/m^3");
+    if (!density_in_bounds(P.rho[i])) fail_density(i);
     if (v_cap > 0.0 && dot(P.v[i], P.v[i]) > v_cap * v_cap)
         fail(i, "speed", norm(P.v[i]), "above max_mach * c0 = " + fmt(v_cap) + " m/s, at (" + fmt(x[0]) + ", " + fmt(x[1]) + ") m");
     if (g.walls_x && x[0] < -g.thickness) fail(i, "x", x[0], "beyond the outer face of the left wall at x = " + fmt(-g.thickness) + " m, at y = " + fmt(x[1]) + " m: lost through the wall");

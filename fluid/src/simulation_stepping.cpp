@@ -89,7 +89,7 @@ void Simulation2D::step_verlet(double dt, double t_after) {
     // evaluation per step at the new positions and densities. Integrated densities take the trapezoid of
     // their rate at fixed v^{n+1/2}: half with drho(x^n), half with drho(x^{n+1}) in the evaluation, before
     // the pressures. drho depends on the positions, so taking it all at x^n (as a drift like the
-    // positions' would) leaves an O(dt^2) error a step: first order, measured on a dam break (test_integrators).
+    // positions' would) leaves an O(dt^2) error a step: first order, measured on a dam break (fluid.integrator_order).
     auto& P = st_.P;
     const double half = 0.5 * dt;
     const long long n = static_cast<long long>(P.size());

@@ -335,34 +335,42 @@ def test_pareto_front():
 # ---------------------------------------------------------------------------------------------------
 
 
-def test_time_step_convergence_orders():
-    d = harness.out_dir("sweep-dt")
-    path = write(os.path.join(d, "dt.toml"), f'''
+def beam_against_reference(end_time, integrators, reference_dt, more_grid=""):
+    """A sweep file's text up to its [chart] or [bisect]: BEAM's cantilever to end_time with its step set by
+    dt_max alone, the integrators (a TOML array) as a grid axis (plus `more_grid` lines), a newmark reference
+    run at reference_dt, and the tip's difference from it as the metric."""
+    return f'''
 [sweep]
 scene = "{BEAM}"
 timeout_s = 60
 threads_per_run = 1
 
 [fixed]
-"run.end_time" = 0.1
+"run.end_time" = {end_time}
 "structure.time.resolved_modes" = 1
 "structure.time.steps_per_period" = 2
 "structure.time.max_numerical_damping" = 0.5
 
 [grid]
-"structure.time.integrator" = ["newmark", "backward_euler"]
-"structure.time.dt_max" = [1e-3, 5e-4, 2.5e-4]
+"structure.time.integrator" = {integrators}
+{more_grid}
 
 [[case]]
 name = "reference"
 reference = true
-set = {{ "structure.time.integrator" = "newmark", "structure.time.dt_max" = 1.5625e-5 }}
+set = {{ "structure.time.integrator" = "newmark", "structure.time.dt_max" = {reference_dt} }}
 
 [[metric]]
 name = "watchpoint_vs_reference_run"
 label = "tip"
 watchpoint = "tip"
+'''
 
+
+def test_time_step_convergence_orders():
+    d = harness.out_dir("sweep-dt")
+    path = write(os.path.join(d, "dt.toml"), beam_against_reference(0.1, '["newmark", "backward_euler"]', 1.5625e-5,
+                                                                    '"structure.time.dt_max" = [1e-3, 5e-4, 2.5e-4]') + '''
 [chart]
 series = ["structure.time.integrator"]
 x = ["cpu_s"]
@@ -455,38 +463,14 @@ def test_a_bisection_bounded_by_a_reference_metric_sees_the_reference_run():
     runs first and every probe's metrics see it. Before 2026-11-27 each probe saw only itself, every probe
     failed with 'no reference run', and the bisection reported that neither end passes."""
     d = harness.out_dir("sweep-bisect-reference")
-    path = write(os.path.join(d, "bisect.toml"), f'''
-[sweep]
-scene = "{BEAM}"
-timeout_s = 60
-threads_per_run = 1
-
-[fixed]
-"run.end_time" = 0.05
-"structure.time.resolved_modes" = 1
-"structure.time.steps_per_period" = 2
-"structure.time.max_numerical_damping" = 0.5
-
-[grid]
-"structure.time.integrator" = ["backward_euler", "generalized_alpha"]
-
-[[case]]
-name = "reference"
-reference = true
-set = {{ "structure.time.integrator" = "newmark", "structure.time.dt_max" = 1e-5 }}
-
-[[metric]]
-name = "watchpoint_vs_reference_run"
-label = "tip"
-watchpoint = "tip"
-
+    path = write(os.path.join(d, "bisect.toml"), beam_against_reference(0.05, '["backward_euler", "generalized_alpha"]', 1e-5) + '''
 [bisect]
 key = "structure.time.dt_max"
 low = 1e-4
 high = 1e-2
 rel_tol = 0.3
 max_runs = 8
-fail_if = {{ "tip.max_rel" = 0.05 }}
+fail_if = { "tip.max_rel" = 0.05 }
 ''')
     out = os.path.join(d, "out")
     rc, text = sweep(path, "--out", out)

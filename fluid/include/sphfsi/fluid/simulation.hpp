@@ -155,6 +155,8 @@ private:
     // Summed densities are only known at the next evaluation: their bounds are checked there, so that a
     // bad one is named with the step and time of the positions it was summed at.
     void check_summed_densities() const;
+    bool density_in_bounds(double rho) const;        // within failure.min/max_density_ratio (false for NaN)
+    [[noreturn]] void fail_density(std::size_t i) const;  // names why fluid particle i's density is out of them
     void mark_escaped();
     bool over_the_wall(const V& x) const;  // beyond a side wall of an open tank, having gone over it
     bool through_obstacle(const Box& b, const V& x) const;  // lost into a static obstacle
