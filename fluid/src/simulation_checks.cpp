@@ -103,6 +103,7 @@ void Simulation2D::check_summed_densities() const {
 
 double Simulation2D::check_state() {
     mark_escaped();
+    if (section_.on()) section_.place(st_.t);
     const auto& P = st_.P;
     const auto& g = geometry_;
     const double v_cap = s_.max_mach * c0_;  // 0: no reference speed (PCISPH without gravity or u_max)
@@ -119,7 +120,7 @@ double Simulation2D::check_state() {
         if (g.lid && x[1] > g.height + g.thickness) return true;
         for (const Box& b : g.obstacles)
             if (through_obstacle(b, x)) return true;
-        return false;
+        return section_.on() && section_.lost(x);
     };
 #pragma omp parallel for schedule(static) reduction(|| : bad) reduction(max : rho_max)
     for (long long q = 0; q < n; ++q) {
@@ -144,6 +145,8 @@ double Simulation2D::check_state() {
     if (g.walls_x && x[0] > g.width + g.thickness) fail(i, "x", x[0], "beyond the outer face of the right wall at x = " + fmt(g.width + g.thickness) + " m, at y = " + fmt(x[1]) + " m: lost through the wall");
     if (g.floor && x[1] < -g.thickness) fail(i, "y", x[1], "below the outer face of the floor at y = " + fmt(-g.thickness) + " m: lost through the wall");
     if (g.lid && x[1] > g.height + g.thickness) fail(i, "y", x[1], "above the outer face of the lid at y = " + fmt(g.height + g.thickness) + " m: lost through the wall");
+    if (section_.on() && section_.lost(x))
+        fail(i, "position", x[0], "inside " + section_.name() + ", deeper below its faces than its solid particles reach: lost through it (y = " + fmt(x[1]) + " m)");
     fail(i, "position", x[0], "inside an obstacle, deeper than its wall layers: lost through the wall (y = " + fmt(x[1]) + " m)");
 }
 
@@ -167,6 +170,7 @@ Simulation2D::Crossing Simulation2D::wall_crossings() const {
             if (why.empty() && x[0] > b.x0 + tol && x[0] < b.x0 + b.width - tol && x[1] > b.y0 + tol &&
                 x[1] < b.y0 + b.height - tol)
                 why = "inside an obstacle";
+        if (why.empty() && section_.on() && section_.past_surface(x, tol)) why = "inside " + section_.name();
         if (why.empty()) continue;
         if (c.count++ == 0)
             c.first = "particle " + std::to_string(P.id[i]) + " at (" + fmt(x[0]) + ", " + fmt(x[1]) + ") m: " + why;

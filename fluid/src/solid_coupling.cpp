@@ -99,6 +99,14 @@ void InterfaceCoupling::end_window() {
     state_.dt = 0.0;
 }
 
+void InterfaceCoupling::vertex_positions(double t, std::vector<Vec2>& out) const {
+    const double s = state_.dt > 0.0 ? std::clamp((t - state_.t0) / state_.dt, 0.0, 1.0) : 0.0;
+    const bool end = state_.dt > 0.0 && t >= state_.t0 + state_.dt;  // as kinematics() takes the window's end
+    out.resize(reference_.size());
+    for (std::size_t i = 0; i < reference_.size(); ++i)
+        out[i] = reference_[i] + (end ? state_.u1[i] : state_.u0[i] + (state_.u1[i] - state_.u0[i]) * s);
+}
+
 void InterfaceCoupling::kinematics(std::size_t k, double t, Vec2& x, Vec2& v, Vec2& a) const {
     const auto& w = weights_[k];
     // Fraction of the window elapsed; outside a window (dt = 0) the structure sits at its start values.

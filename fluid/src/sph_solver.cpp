@@ -114,6 +114,14 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
                 a = Vec2{};
             },
             [g](const Vec2& p) { return p[0] > g.x0 && p[0] < g.x0 + g.thickness && p[1] < g.height; });
+        const std::vector<Vec2> corners{Vec2{{g.x0, 0.0}}, Vec2{{g.x0 + g.thickness, 0.0}},
+                                        Vec2{{g.x0 + g.thickness, g.height}}, Vec2{{g.x0, g.height}}};
+        sim_->set_solid_section("the gate", {{0, 1, 2, 3}}, corners, [corners, lift](double t, std::vector<Vec2>& out) {
+            double dy = 0.0, vy = 0.0;
+            lift.at(t, dy, vy);
+            out = corners;
+            for (Vec2& c : out) c[1] += dy;
+        });
     }
     // A checkpoint opens with the interface displacement the run started from (empty: undeformed): a resume
     // clears the water around the structure where the first start did, so it lays out the same particles.
@@ -195,6 +203,11 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
                 }
                 return false;
             });
+        std::vector<SolidSection::Quad> cells(mesh.cells.rows());
+        for (std::size_t c = 0; c < cells.size(); ++c)
+            for (std::size_t k = 0; k < 4; ++k) cells[c][k] = mesh.cells(c, static_cast<std::uint64_t>(k));
+        sim_->set_solid_section("the structure", std::move(cells), coupling->vertex_reference(),
+                                [coupling](double t, std::vector<Vec2>& out) { coupling->vertex_positions(t, out); });
     }
     if (saved) {
         try {
@@ -284,8 +297,9 @@ protocol::AdvanceReply SphSolver::advance(const protocol::AdvanceRequest& reques
     stats["potential_energy"] = Value(energy.potential);
     stats["escaped_particles"] = Value(static_cast<std::int64_t>(sim_->escaped_count()));
     stats["free_surface_particles"] = Value(static_cast<std::int64_t>(sim_->free_surface_count()));
-    // Fluid particles more than 0.1 dp beyond a tank wall surface or inside an obstacle at the window's end
-    // (Simulation2D::wall_crossings; 0 in a healthy run): makes a leak visible in every record.
+    // Fluid particles more than 0.1 dp beyond a tank wall's surface or inside an obstacle, the gate or the
+    // structure at the window's end (Simulation2D::wall_crossings; 0 in a healthy run): makes a leak visible
+    // in every record.
     stats["wall_crossings"] = Value(static_cast<std::int64_t>(sim_->wall_crossings().count));
     reply.stats = Value(std::move(stats));
     return reply;

@@ -181,6 +181,55 @@ TEST_SUITE("failure") {
         CHECK(msg.find("inside an obstacle") != std::string::npos);
     }
 
+    TEST_CASE("a particle thrown into the gate or a coupled structure stops the run, naming the solid") {
+        // The thin obstacle's case above with the plate made of solid particles: a gate that has not risen,
+        // then a coupled structure standing on the floor, as a mesh of elements shorter than a spacing, two
+        // cells through its thickness, that do not share their vertices.
+        auto tank = [] {
+            Value b;
+            b.make_table();
+            b = with(b, {{"dp", 0.005}, {"tank.width", 0.1}, {"tank.height", 0.05}});
+            b.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, 0.01, 0.01)});
+            return b;
+        };
+        std::string msg = thrown(with(tank(), {{"gate.x0", 0.03}, {"gate.thickness", 0.01}, {"gate.lift_speed", 1e-9}}), 0.0173205);
+        MESSAGE(msg);
+        CHECK(msg.find("inside the gate") != std::string::npos);
+
+        sphfsi::protocol::InterfaceMesh plate;
+        const int rows = 2, along = 25;  // cells 0.005 x 0.0016 m: 0.32 dp along the plate
+        plate.vertices = sphfsi::protocol::F64Array::zeros(4 * rows * along, 2);
+        plate.cells = sphfsi::protocol::I32Array::zeros(rows * along, 4);
+        for (int j = 0, c = 0; j < along; ++j)
+            for (int i = 0; i < rows; ++i, ++c) {
+                const double x0 = 0.03 + 0.005 * i, y0 = 0.04 * j / along, y1 = 0.04 * (j + 1) / along;
+                const double corners[4][2] = {{x0, y0}, {x0 + 0.005, y0}, {x0 + 0.005, y1}, {x0, y1}};
+                for (int k = 0; k < 4; ++k) {
+                    plate.vertices(4 * c + k, 0) = corners[k][0];
+                    plate.vertices(4 * c + k, 1) = corners[k][1];
+                    plate.cells(c, k) = 4 * c + k;
+                }
+            }
+        Value f = with(tank(), {{"gravity", vec2(100.0, 0.0)}, {"threads", 1}, {"density.method", "summation"}});
+        sphfsi::fluid::SphSolver solver;
+        sphfsi::protocol::InitRequest init;
+        init.config = f;
+        init.interface = plate;
+        solver.init(init);
+        sphfsi::protocol::Progress progress;
+        sphfsi::protocol::AdvanceRequest req;
+        req.dt = 0.0173205;
+        req.substeps = 1;
+        msg = "no error";
+        try {
+            solver.advance(req, progress);
+        } catch (const sphfsi::protocol::SolverError& e) {
+            msg = e.what();
+        }
+        MESSAGE(msg);
+        CHECK(msg.find("inside the structure") != std::string::npos);
+    }
+
     TEST_CASE("a tank periodic in y has no brim: a particle through its side wall is lost, not escaped") {
         Value a;
         a.make_table();

@@ -15,6 +15,7 @@
 //
 // The gate's particles are solid particles like those of a coupled structure (Adami wall pressure with the
 // gate's own velocity; no-slip as for the walls), driven by this prescribed motion instead of a structure.
+// Fluid through it stops the run as fluid through a coupled structure does (solid_section.hpp).
 #include <vector>
 
 #include "sphfsi/fluid/settings.hpp"

@@ -16,6 +16,7 @@
 #include "sphfsi/fluid/pcisph.hpp"
 #include "sphfsi/fluid/scene_setup.hpp"
 #include "sphfsi/fluid/settings.hpp"
+#include "sphfsi/fluid/solid_section.hpp"
 #include "sphfsi/fluid/state_io.hpp"
 #include "sphfsi/fluid/surface_stress.hpp"
 #include "sphfsi/fluid/time_step.hpp"
@@ -47,6 +48,11 @@ public:
     void add_solids(const std::vector<V>& reference, const std::vector<V>& at_start, SolidKinematics kinematics,
                     const std::function<bool(const V&)>& inside_solid);
     void set_solid_kinematics(SolidKinematics kinematics) { kinematics_ = std::move(kinematics); }
+    // The solid particles' cross-section as cells of `reference` vertices, placed at time t by `vertices`:
+    // a fluid centre deep inside it stops the run as lost through `name` (solid_section.hpp). Its faces
+    // outside the tank's interior are not ones the water can touch.
+    void set_solid_section(std::string name, std::vector<SolidSection::Quad> cells, const std::vector<V>& reference,
+                           SolidSection::Vertices vertices);
 
     // Advances to t_end: substeps == 0 adaptive steps landing exactly on t_end, else that many equal steps.
     // on_step is called after every step (progress). Throws protocol::SolverError on failure.
@@ -189,6 +195,7 @@ private:
     CellGrid<Dim> grid_;
     V domain_lo_, domain_hi_;
     SolidKinematics kinematics_;
+    SolidSection section_;
     std::vector<V> solid_acc_;  // kinematic acceleration by solid index (Adami's a_w)
     std::vector<V> solid_xv_;   // scratch of refresh_solid_rates: solid positions and velocities
     std::vector<std::uint8_t> near_solid_;  // scratch of refresh_solid_rates: particles whose rates see a solid

@@ -29,6 +29,7 @@ public:
     std::size_t particle_count() const { return weights_.size(); }
     std::size_t vertex_count() const { return reference_.size(); }
     const std::vector<Vec2>& reference_positions() const { return particles_ref_; }
+    const std::vector<Vec2>& vertex_reference() const { return reference_; }
     const std::vector<SolidParticleWeights>& weights() const { return weights_; }
     // The particles' positions with the vertices displaced by `displacement` (2 values per vertex, as a
     // checkpoint keeps it; empty: the reference positions).
@@ -42,6 +43,8 @@ public:
 
     // Position, velocity and acceleration of solid particle k at time t (inside the current window).
     void kinematics(std::size_t k, double t, Vec2& x, Vec2& v, Vec2& a) const;
+    // The vertices' positions at time t, where kinematics() puts the particles' cells.
+    void vertex_positions(double t, std::vector<Vec2>& out) const;
 
     // F_v = sum_p w_pv f_p, shape (n_vertices, 2).
     static protocol::F64Array map_forces(const std::vector<SolidParticleWeights>& weights,

@@ -1,0 +1,92 @@
+#pragma once
+// The cross-section of a moving solid (a coupled structure's interface mesh, or the lifted gate) as the
+// fluid's failure check sees it: a fluid centre deep inside it has gone through the solid, as one beyond a
+// tank wall's outer face has gone through that wall.
+//
+// The rule is the static obstacles' (Simulation2D::through_obstacle), stated for any union of quadrilateral
+// cells. A centre inside the union is still "at" a face f the water can touch when its depth d below f is
+// at most allowed(f) = min(L, max((w - dp)/2, dp/2)), where L is how deep the wall layers reach (the tank's
+// wall thickness, a kernel support) and w the section's thickness through the centre across f (from f, along
+// the line from f's nearest point through the centre, to the next face). It is lost when it is at no face:
+// deeper than L below every face, or, across a section thinner than 2 L + dp, within dp/2 of the middle and
+// more than dp/2 past the face (a step moves a particle a small fraction of a spacing, so one passing
+// through lands in that band; without the repulsive force centres sit up to 0.43 dp past a surface). A
+// section no thicker than dp is never checked across.
+//
+// Why these choices (a review of a first version, reverted, found each of them wrong there):
+// - Faces are the edges no two cells share, found by the vertices' reference positions, so a mesh of several
+//   cells through the thickness, or one whose cells do not share vertex indices, has no inner faces.
+// - Depth is measured to every face of the whole union, not to the faces of the cell holding the centre:
+//   with elements shorter than dp, a centre just past a member's end lies in a cell with no end face.
+// - A face counts only where the centre lies over it (its projection falls on the segment), or where its
+//   nearest point is a corner: measured obliquely from a far segment, a thin section looks thick.
+// - A face outside the tank's interior (a plate's end set into a side wall, the foot of a member standing on
+//   the floor) is not one the water can touch; it still bounds the thickness.
+// - Cells and faces are binned on a grid of cells 2 L + dp wide, rebuilt at every placement: a particle
+//   tests the few cells of its own bin, and only a centre inside the section looks at faces, within the 3 x 3
+//   bins around it (the farthest a face can matter).
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "sphfsi/fluid/vec.hpp"
+
+namespace sphfsi::fluid {
+
+class SolidSection {
+public:
+    using Quad = std::array<std::int32_t, 4>;                                 // vertex indices, either turning
+    using Vertices = std::function<void(double t, std::vector<Vec2>& out)>;  // the vertices' places at time t
+    using Touchable = std::function<bool(const Vec2& a, const Vec2& b)>;     // can water touch face a-b?
+
+    SolidSection() = default;
+    // `name` names the solid in failure messages ("the structure", "the gate"); `reference`: the vertices'
+    // reference positions (faces are found from them); `layers`: L above; `dp`: the particle spacing.
+    SolidSection(std::string name, std::vector<Quad> cells, const std::vector<Vec2>& reference, Vertices vertices,
+                 Touchable touchable, double layers, double dp);
+
+    bool on() const { return static_cast<bool>(vertices_); }
+    const std::string& name() const { return name_; }
+    // Moves the section to time t; lost() then answers for positions at that time.
+    void place(double t);
+    // Whether a fluid centre at x is deeper inside the section than the rule above allows.
+    bool lost(const Vec2& x) const;
+    // Whether x is inside the section further than `tol` from every face the water can touch (the
+    // validation's count of wall crossings, Simulation2D::wall_crossings).
+    bool past_surface(const Vec2& x, double tol) const;
+
+private:
+    struct Face {
+        Vec2 a, b;
+        bool touchable = false;
+    };
+    // Items binned on the grid, as offsets into one list (the bins of a cell's or face's bounding box).
+    struct Bins {
+        std::vector<std::uint32_t> start, items;
+    };
+    bool inside(const Vec2& x) const;
+    std::vector<std::uint32_t> faces_near(const Vec2& x) const;
+    bool at_a_face(const Vec2& x, const Vec2& foot, double depth, const std::vector<std::uint32_t>& near) const;
+    std::array<int, 2> bin_of(const Vec2& x) const;
+    template <class Box>
+    void fill(Bins& bins, std::size_t n, const Box& box_of);
+
+    std::string name_;
+    std::vector<Quad> cells_;
+    std::vector<std::array<std::int32_t, 2>> faces_;  // vertex index pairs of the edges no two cells share
+    Vertices vertices_;
+    Touchable touchable_;
+    double layers_ = 0.0, dp_ = 0.0;
+
+    // At the placed time:
+    std::vector<Vec2> at_;
+    std::vector<Face> placed_faces_;
+    Vec2 lo_{}, hi_{};  // bounding box of the vertices
+    double bin_ = 1.0;
+    int nx_ = 0, ny_ = 0;
+    Bins cell_bins_, face_bins_;
+};
+
+}  // namespace sphfsi::fluid

@@ -1,0 +1,199 @@
+#include "sphfsi/fluid/solid_section.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <utility>
+
+namespace sphfsi::fluid {
+namespace {
+
+double cross(const Vec2& a, const Vec2& b) { return a[0] * b[1] - a[1] * b[0]; }
+
+// Crossing-number test: inside a quadrilateral of either turning, convex or not.
+bool inside_quad(const std::array<Vec2, 4>& q, const Vec2& x) {
+    bool in = false;
+    for (std::size_t k = 0, j = 3; k < 4; j = k++) {
+        const Vec2 &a = q[k], &b = q[j];
+        if ((a[1] > x[1]) != (b[1] > x[1]) && x[0] < a[0] + (b[0] - a[0]) * (x[1] - a[1]) / (b[1] - a[1])) in = !in;
+    }
+    return in;
+}
+
+// Nearest point of segment a-b to x, and where along it (u in [0, 1] when x lies over the segment).
+Vec2 foot_on(const Vec2& a, const Vec2& b, const Vec2& x, double& u) {
+    const Vec2 e = b - a;
+    const double len2 = dot(e, e);
+    u = len2 > 0.0 ? dot(x - a, e) / len2 : 0.0;
+    return a + e * std::clamp(u, 0.0, 1.0);
+}
+
+}  // namespace
+
+SolidSection::SolidSection(std::string name, std::vector<Quad> cells, const std::vector<Vec2>& reference,
+                           Vertices vertices, Touchable touchable, double layers, double dp)
+    : name_(std::move(name)), cells_(std::move(cells)), vertices_(std::move(vertices)),
+      touchable_(std::move(touchable)), layers_(layers), dp_(dp) {
+    // Vertices at the same reference place (to 1e-6 dp) are one, so cells that repeat a vertex instead of
+    // sharing its index still share the edge.
+    const double tol = 1e-6 * dp;
+    std::map<std::pair<long long, long long>, std::int32_t> by_place;
+    std::vector<std::int32_t> same(reference.size());
+    for (std::size_t v = 0; v < reference.size(); ++v) {
+        const auto key = std::make_pair(std::llround(reference[v][0] / tol), std::llround(reference[v][1] / tol));
+        same[v] = by_place.emplace(key, static_cast<std::int32_t>(v)).first->second;
+    }
+    std::map<std::pair<std::int32_t, std::int32_t>, int> uses;
+    auto edge = [&](const Quad& c, std::size_t k) {
+        return std::minmax(same[static_cast<std::size_t>(c[k])], same[static_cast<std::size_t>(c[(k + 1) % 4])]);
+    };
+    for (const Quad& c : cells_)
+        for (std::size_t k = 0; k < 4; ++k) ++uses[edge(c, k)];
+    for (const Quad& c : cells_)
+        for (std::size_t k = 0; k < 4; ++k) {
+            const auto e = edge(c, k);
+            if (e.first != e.second && uses[e] == 1) faces_.push_back({c[k], c[(k + 1) % 4]});
+        }
+}
+
+template <class Box>
+void SolidSection::fill(Bins& bins, std::size_t n, const Box& box_of) {
+    bins.start.assign(static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_) + 1, 0);
+    auto each_bin = [&](std::size_t i, auto&& visit) {
+        Vec2 lo, hi;
+        box_of(i, lo, hi);
+        const auto a = bin_of(lo), b = bin_of(hi);
+        for (int y = a[1]; y <= b[1]; ++y)
+            for (int x = a[0]; x <= b[0]; ++x) visit(static_cast<std::size_t>(y) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(x));
+    };
+    for (std::size_t i = 0; i < n; ++i) each_bin(i, [&](std::size_t k) { ++bins.start[k + 1]; });
+    for (std::size_t k = 1; k < bins.start.size(); ++k) bins.start[k] += bins.start[k - 1];
+    bins.items.resize(bins.start.back());
+    std::vector<std::uint32_t> next(bins.start.begin(), bins.start.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) each_bin(i, [&](std::size_t k) { bins.items[next[k]++] = static_cast<std::uint32_t>(i); });
+}
+
+void SolidSection::place(double t) {
+    vertices_(t, at_);
+    lo_ = hi_ = at_.empty() ? Vec2{} : at_.front();
+    for (const Vec2& v : at_)
+        for (int k = 0; k < 2; ++k) {
+            lo_[k] = std::min(lo_[k], v[k]);
+            hi_[k] = std::max(hi_[k], v[k]);
+        }
+    placed_faces_.clear();
+    for (const auto& f : faces_) {
+        const Vec2 a = at_[static_cast<std::size_t>(f[0])], b = at_[static_cast<std::size_t>(f[1])];
+        placed_faces_.push_back({a, b, !touchable_ || touchable_(a, b)});
+    }
+    // Bins at least as wide as the farthest a face can matter (2 L + dp), wider where the section is so large
+    // that those would number more than 2^20.
+    bin_ = 2.0 * layers_ + dp_;
+    for (;;) {
+        nx_ = static_cast<int>(std::floor((hi_[0] - lo_[0]) / bin_)) + 1;
+        ny_ = static_cast<int>(std::floor((hi_[1] - lo_[1]) / bin_)) + 1;
+        if (static_cast<double>(nx_) * ny_ <= double(1 << 20)) break;
+        bin_ *= 2.0;
+    }
+    fill(cell_bins_, cells_.size(), [&](std::size_t i, Vec2& lo, Vec2& hi) {
+        lo = hi = at_[static_cast<std::size_t>(cells_[i][0])];
+        for (std::int32_t v : cells_[i])
+            for (int k = 0; k < 2; ++k) {
+                lo[k] = std::min(lo[k], at_[static_cast<std::size_t>(v)][k]);
+                hi[k] = std::max(hi[k], at_[static_cast<std::size_t>(v)][k]);
+            }
+    });
+    fill(face_bins_, placed_faces_.size(), [&](std::size_t i, Vec2& lo, Vec2& hi) {
+        const Face& f = placed_faces_[i];
+        for (int k = 0; k < 2; ++k) {
+            lo[k] = std::min(f.a[k], f.b[k]);
+            hi[k] = std::max(f.a[k], f.b[k]);
+        }
+    });
+}
+
+std::array<int, 2> SolidSection::bin_of(const Vec2& x) const {
+    return {std::clamp(static_cast<int>(std::floor((x[0] - lo_[0]) / bin_)), 0, nx_ - 1),
+            std::clamp(static_cast<int>(std::floor((x[1] - lo_[1]) / bin_)), 0, ny_ - 1)};
+}
+
+bool SolidSection::inside(const Vec2& x) const {
+    if (nx_ == 0 || x[0] < lo_[0] || x[0] > hi_[0] || x[1] < lo_[1] || x[1] > hi_[1]) return false;  // not placed, or outside
+    const auto b = bin_of(x);
+    const std::size_t k = static_cast<std::size_t>(b[1]) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(b[0]);
+    for (std::uint32_t i = cell_bins_.start[k]; i < cell_bins_.start[k + 1]; ++i) {
+        const Quad& c = cells_[cell_bins_.items[i]];
+        std::array<Vec2, 4> q;
+        for (std::size_t v = 0; v < 4; ++v) q[v] = at_[static_cast<std::size_t>(c[v])];
+        if (inside_quad(q, x)) return true;
+    }
+    return false;
+}
+
+// Whether the centre x, `depth` below a face at `foot`, is within what that face allows: the thickness is
+// measured on along the line from the foot through x to the first face it meets.
+bool SolidSection::at_a_face(const Vec2& x, const Vec2& foot, double depth, const std::vector<std::uint32_t>& near) const {
+    const Vec2 n = (x - foot) * (1.0 / depth);
+    double beyond = std::numeric_limits<double>::infinity();
+    for (std::uint32_t i : near) {
+        const Face& f = placed_faces_[i];
+        const Vec2 e = f.b - f.a, r = f.a - x;
+        const double denom = cross(n, e);
+        if (denom == 0.0) continue;  // along the line: it meets the line's ends' faces instead
+        const double s = cross(r, e) / denom, w = cross(r, n) / denom;
+        if (s > 0.0 && w >= 0.0 && w <= 1.0) beyond = std::min(beyond, s);
+    }
+    const double across = depth + beyond;
+    const double allowed = std::min(layers_, std::max(0.5 * (across - dp_), 0.5 * dp_));
+    return depth <= allowed;
+}
+
+// The faces within reach of x: those binned in the 3 x 3 bins around it.
+std::vector<std::uint32_t> SolidSection::faces_near(const Vec2& x) const {
+    std::vector<std::uint32_t> near;
+    const auto b = bin_of(x);
+    for (int y = std::max(b[1] - 1, 0); y <= std::min(b[1] + 1, ny_ - 1); ++y)
+        for (int bx = std::max(b[0] - 1, 0); bx <= std::min(b[0] + 1, nx_ - 1); ++bx) {
+            const std::size_t k = static_cast<std::size_t>(y) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(bx);
+            near.insert(near.end(), face_bins_.items.begin() + face_bins_.start[k], face_bins_.items.begin() + face_bins_.start[k + 1]);
+        }
+    std::sort(near.begin(), near.end());
+    near.erase(std::unique(near.begin(), near.end()), near.end());
+    return near;
+}
+
+bool SolidSection::past_surface(const Vec2& x, double tol) const {
+    if (!inside(x)) return false;
+    for (std::uint32_t i : faces_near(x)) {
+        const Face& f = placed_faces_[i];
+        double u = 0.0;
+        if (f.touchable && norm(x - foot_on(f.a, f.b, x, u)) <= tol) return false;
+    }
+    return true;
+}
+
+bool SolidSection::lost(const Vec2& x) const {
+    if (!inside(x)) return false;
+    const std::vector<std::uint32_t> near = faces_near(x);
+    constexpr double over = 1e-9;  // a centre over a shared corner lies over both faces
+    double nearest = std::numeric_limits<double>::infinity();
+    Vec2 nearest_foot{};
+    bool nearest_is_corner = false;
+    for (std::uint32_t i : near) {
+        const Face& f = placed_faces_[i];
+        if (!f.touchable) continue;
+        double u = 0.0;
+        const Vec2 foot = foot_on(f.a, f.b, x, u);
+        const double depth = norm(x - foot);
+        if (depth == 0.0) return false;  // on the face
+        const bool over_face = u >= -over && u <= 1.0 + over;
+        if (over_face && depth <= layers_ && at_a_face(x, foot, depth, near)) return false;
+        if (depth < nearest) nearest = depth, nearest_foot = foot, nearest_is_corner = !over_face;
+    }
+    // A centre over no face near it (beside a corner that turns into the solid) is measured from that corner.
+    if (nearest_is_corner && nearest <= layers_ && at_a_face(x, nearest_foot, nearest, near)) return false;
+    return true;
+}
+
+}  // namespace sphfsi::fluid

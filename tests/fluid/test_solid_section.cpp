@@ -1,0 +1,171 @@
+// The cross-section check of a moving solid (solid_section.hpp): where a fluid centre inside a coupled
+// structure or the gate counts as lost through it. The rule is the static obstacles' (test_failure.cpp), so
+// these cases are the shapes that rule had to be generalised for: elements shorter than a spacing, several
+// cells through the thickness, cells that repeat vertices instead of sharing them, a corner turning into
+// the solid, faces against the tank, and a section that moves.
+#include <doctest/doctest.h>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "sphfsi/fluid/solid_section.hpp"
+
+using sphfsi::fluid::SolidSection;
+using sphfsi::fluid::Vec2;
+
+namespace {
+
+constexpr double dp = 0.004;
+constexpr double L = 3 * dp;  // the wall layers' reach
+
+struct Mesh {
+    std::vector<Vec2> vertices;
+    std::vector<SolidSection::Quad> cells;
+};
+
+// The rectangle [x0, x0 + w] x [y0, y0 + t] as nx x ny cells. `shared`: neighbouring cells share vertex
+// indices; otherwise every cell has its own four (at the same places).
+Mesh rectangle(double x0, double y0, double w, double t, int nx, int ny, bool shared = true) {
+    Mesh m;
+    auto at = [&](int i, int j) { return Vec2{{x0 + w * i / nx, y0 + t * j / ny}}; };
+    if (shared) {
+        for (int j = 0; j <= ny; ++j)
+            for (int i = 0; i <= nx; ++i) m.vertices.push_back(at(i, j));
+        for (int j = 0; j < ny; ++j)
+            for (int i = 0; i < nx; ++i) {
+                const int v = j * (nx + 1) + i;
+                m.cells.push_back({v, v + 1, v + nx + 2, v + nx + 1});
+            }
+        return m;
+    }
+    for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) {
+            const int v = static_cast<int>(m.vertices.size());
+            for (const auto& c : {at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)}) m.vertices.push_back(c);
+            m.cells.push_back({v, v + 3, v + 2, v + 1});  // clockwise, as some meshes are
+        }
+    return m;
+}
+
+Mesh joined(Mesh a, const Mesh& b) {
+    const auto base = static_cast<std::int32_t>(a.vertices.size());
+    a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());
+    for (auto c : b.cells) {
+        for (auto& v : c) v += base;
+        a.cells.push_back(c);
+    }
+    return a;
+}
+
+// The section of a mesh standing still (lift = 0) or rising by `lift` per second; every face touchable
+// unless `touchable` says otherwise.
+SolidSection section(const Mesh& m, double lift = 0.0, SolidSection::Touchable touchable = {}) {
+    SolidSection s("the structure", m.cells, m.vertices,
+                   [m, lift](double t, std::vector<Vec2>& out) {
+                       out = m.vertices;
+                       for (Vec2& v : out) v[1] += lift * t;
+                   },
+                   std::move(touchable), L, dp);
+    s.place(0.0);
+    return s;
+}
+
+}  // namespace
+
+TEST_SUITE("solid_section") {
+    TEST_CASE("a thin plate of elements shorter than a spacing: lost only near its middle, past half a spacing") {
+        // 1.25 dp thick (the elastic gate's 5 mm at dp = 4 mm), 0.1 m long, elements of 0.32 dp. The rule
+        // allows max((1.25 - 1)/2, 1/2) dp = dp/2 below a long face: lost within 0.125 dp of the middle.
+        const double t = 1.25 * dp, len = 0.1;
+        const auto s = section(rectangle(0.0, 0.0, len, t, static_cast<int>(len / (0.32 * dp)), 1));
+        CHECK(s.lost(Vec2{{0.05, 0.5 * t}}));
+        CHECK(s.lost(Vec2{{0.05, 0.5 * t + 0.1 * dp}}));
+        CHECK_FALSE(s.lost(Vec2{{0.05, 0.5 * t + 0.15 * dp}}));
+        CHECK_FALSE(s.lost(Vec2{{0.05, t - 0.3 * dp}}));  // 0.3 dp below the top face
+        CHECK_FALSE(s.lost(Vec2{{0.05, t + 0.1 * dp}}));  // outside
+        // 0.45 dp past the plate's end, at mid-thickness: the end face is 0.45 dp away and the plate runs on
+        // beyond it (the first version of this check stopped the run here, its cell having no end face).
+        CHECK_FALSE(s.lost(Vec2{{len - 0.45 * dp, 0.5 * t}}));
+        // Deeper than the wall layers reach from the end, it is at no face.
+        CHECK_FALSE(s.lost(Vec2{{len - 0.9 * L, 0.5 * t}}));
+        CHECK(s.lost(Vec2{{len - 1.1 * L, 0.5 * t}}));
+        // A plate no thicker than a spacing is never checked across.
+        const auto thin = section(rectangle(0.0, 0.0, len, dp, 40, 1));
+        CHECK_FALSE(thin.lost(Vec2{{0.05, 0.5 * dp}}));
+    }
+
+    TEST_CASE("a thick section of several cells through its thickness: lost deeper than the wall layers reach") {
+        // 10 dp thick, 4 rows of cells through it; the same with cells that repeat their vertices (clockwise).
+        const double t = 10 * dp, w = 0.1;
+        for (bool shared : {true, false}) {
+            CAPTURE(shared);
+            const auto s = section(rectangle(0.0, 0.0, w, t, 8, 4, shared));
+            CHECK_FALSE(s.lost(Vec2{{0.05, t - 0.9 * L}}));
+            CHECK(s.lost(Vec2{{0.05, t - 1.1 * L}}));
+            CHECK(s.lost(Vec2{{0.05, 0.5 * t}}));
+            CHECK(s.lost(Vec2{{0.05, 0.51 * t}}));  // just over an inner boundary between rows: no face there
+            CHECK_FALSE(s.lost(Vec2{{w - 0.9 * L, 0.5 * t}}));  // near the end face
+            CHECK(s.lost(Vec2{{w - 1.1 * L, 0.5 * t}}));
+        }
+    }
+
+    TEST_CASE("beside a corner that turns into the solid, depth is measured from the corner") {
+        // An L of two thick arms, 10 dp wide each: [0, 30 dp] x [0, 10 dp] and [0, 10 dp] x [10 dp, 30 dp].
+        // The corner at (10 dp, 10 dp) turns into the solid; a centre inside it diagonally lies over no face
+        // near it.
+        const double a = 10 * dp;
+        const auto s = section(joined(rectangle(0.0, 0.0, 3 * a, a, 6, 2), rectangle(0.0, a, a, 2 * a, 2, 4)));
+        const double d = 0.3 * L;  // 0.42 L from the corner along the diagonal
+        CHECK_FALSE(s.lost(Vec2{{a - d, a - d}}));
+        CHECK(s.lost(Vec2{{a - 1.5 * L, a - 1.5 * L}}));  // 2.1 L from the corner, 1.5 L + from every face
+        CHECK(s.lost(Vec2{{0.5 * a, 0.5 * a}}));
+    }
+
+    TEST_CASE("a face outside the tank is not one the water can touch") {
+        // A block standing on the floor: its foot is against the tank, not the water. A centre 0.2 dp above
+        // the floor and deep from the block's sides is lost; with every face touchable it would not be.
+        const Mesh block = rectangle(0.02, 0.0, 0.04, 0.02, 4, 2);
+        const Vec2 x{{0.04, 0.2 * dp}};
+        CHECK_FALSE(section(block).lost(x));
+        const auto on_floor = section(block, 0.0, [](const Vec2& a, const Vec2& b) { return 0.5 * (a[1] + b[1]) > 1e-12; });
+        CHECK(on_floor.lost(x));
+        CHECK_FALSE(on_floor.lost(Vec2{{0.04, 0.02 - 0.5 * L}}));  // near its top, which the water touches
+    }
+
+    TEST_CASE("the section is checked where it is at the time it is placed") {
+        const Mesh block = rectangle(0.0, 0.0, 0.1, 0.1, 5, 5);
+        auto s = section(block, 0.2);  // rises 0.2 m/s
+        const Vec2 above{{0.05, 0.17}}, below{{0.05, 0.05}};
+        CHECK(s.lost(below));
+        CHECK_FALSE(s.lost(above));
+        s.place(0.5);  // now [0.1, 0.2] high
+        CHECK_FALSE(s.lost(below));
+        CHECK(s.lost(above));
+    }
+
+    TEST_CASE("a long diagonal member of many cells") {
+        // 200 cells of 2 dp along a 45-degree line, 5 dp thick: bins keep a particle's test to the cells near
+        // it; depth is from the long faces.
+        const int n = 200;
+        const double step = 2 * dp, t = 5 * dp, c = 0.5 * std::sqrt(2.0);
+        Mesh m;
+        for (int i = 0; i <= n; ++i) {
+            const Vec2 axis{{c * step * i, c * step * i}}, normal{{-c * t, c * t}};
+            m.vertices.push_back(axis);
+            m.vertices.push_back(axis + normal);
+        }
+        for (int i = 0; i < n; ++i) m.cells.push_back({2 * i, 2 * i + 2, 2 * i + 3, 2 * i + 1});
+        const auto s = section(m);
+        auto at = [&](double along, double across) {
+            return Vec2{{c * along - c * across, c * along + c * across}};
+        };
+        CHECK(s.lost(at(100 * step, 0.5 * t)));
+        CHECK_FALSE(s.lost(at(100 * step, 0.9 * dp)));
+        CHECK_FALSE(s.lost(at(100 * step, t + 0.1 * dp)));
+        CHECK_FALSE(s.lost(at(100 * step, -0.1 * dp)));
+        CHECK(s.lost(at(n * step - 1.1 * L, 0.5 * t)));  // 1.1 L from the end, 2.5 dp from both long faces
+        CHECK_FALSE(s.lost(at(n * step - 0.9 * L, 0.5 * t)));
+    }
+}
