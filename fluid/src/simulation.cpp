@@ -5,7 +5,9 @@
 #include "sphfsi/fluid/simulation.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <utility>
 
 #include <omp.h>
 
@@ -153,13 +155,34 @@ void Simulation2D::add_solids(const std::vector<V>& reference, const std::vector
     auto& P = st_.P;
     // Drop fluid particles that overlap the solid; ids are renumbered so they stay 0..n-1.
     ParticleStore<Dim> kept;
-    const double min_d2 = 0.75 * s_.dp * 0.75 * s_.dp;
+    const double min_d = 0.75 * s_.dp;
+    // The solid particles binned on cells min_d wide, sorted by cell: a fluid particle looks at the 3^Dim
+    // cells around its own (every fluid particle against every solid one was O(N_f N_s)).
+    using Cell = std::array<long long, Dim>;
+    auto cell_of = [min_d](const V& x) {
+        Cell c;
+        for (int k = 0; k < Dim; ++k) c[static_cast<std::size_t>(k)] = static_cast<long long>(std::floor(x[k] / min_d));
+        return c;
+    };
+    std::vector<std::pair<Cell, std::size_t>> binned;
+    for (std::size_t k = 0; k < at_start.size(); ++k) binned.emplace_back(cell_of(at_start[k]), k);
+    std::sort(binned.begin(), binned.end());
+    auto near_solid = [&](const V& x) {
+        const Cell home = cell_of(x);
+        int around = 1;
+        for (int k = 0; k < Dim; ++k) around *= 3;
+        for (int o = 0; o < around; ++o) {
+            Cell c = home;
+            for (int k = 0, rest = o; k < Dim; ++k, rest /= 3) c[static_cast<std::size_t>(k)] += rest % 3 - 1;
+            const auto first = std::lower_bound(binned.begin(), binned.end(), std::make_pair(c, std::size_t{0}));
+            for (auto it = first; it != binned.end() && it->first == c; ++it)
+                if (norm2(x - at_start[it->second]) < min_d * min_d) return true;
+        }
+        return false;
+    };
     for (std::size_t i = 0; i < P.size(); ++i) {
         bool drop = false;
-        if (P.kind[i] == Kind::Fluid) {
-            drop = inside_solid(P.x[i]);
-            for (std::size_t k = 0; !drop && k < at_start.size(); ++k) drop = norm2(P.x[i] - at_start[k]) < min_d2;
-        }
+        if (P.kind[i] == Kind::Fluid) drop = inside_solid(P.x[i]) || near_solid(P.x[i]);
         if (drop) continue;
         kept.x.push_back(P.x[i]);
         kept.v.push_back(P.v[i]);
