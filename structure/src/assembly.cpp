@@ -35,27 +35,36 @@ SparseMatrix assemble_mass(const Model& model, MassKind kind) {
     return assemble(model, [](const Element& e) { return consistent_mass(e); });
 }
 
-Vector corotational_internal_force(const Model& model, const Vector& u, SparseMatrix* tangent, double* strain_energy) {
+Vector corotational_internal_force(const Model& model, const Vector& u, SparseMatrix* tangent, double* strain_energy,
+                                   SparseMatrix* material) {
     Vector f = Vector::Zero(model.dof_count());
-    std::vector<Eigen::Triplet<double>> t;
+    std::vector<Eigen::Triplet<double>> t, tm;
     if (tangent) t.reserve(36 * model.elements.size());
+    if (material) tm.reserve(36 * model.elements.size());
     double energy = 0.0;
     Vec6 fe;
-    Mat6 ke;
+    Mat6 ke, kme;
     for (const Element& e : model.elements) {
         const auto d = dofs(e);
         Vec6 de;
         for (int i = 0; i < 6; ++i) de[i] = u[d[i]];
-        const auto s = corotational_element(e, model.nodes[e.n1], model.nodes[e.n2], de, fe, tangent ? &ke : nullptr);
+        const auto s = corotational_element(e, model.nodes[e.n1], model.nodes[e.n2], de, fe, tangent ? &ke : nullptr,
+                                            material ? &kme : nullptr);
         energy += s.strain_energy;
         for (int i = 0; i < 6; ++i) f[d[i]] += fe[i];
-        if (tangent)
-            for (int i = 0; i < 6; ++i)
-                for (int j = 0; j < 6; ++j) t.emplace_back(d[i], d[j], ke(i, j));
+        for (int i = 0; i < 6; ++i)
+            for (int j = 0; j < 6; ++j) {
+                if (tangent) t.emplace_back(d[i], d[j], ke(i, j));
+                if (material) tm.emplace_back(d[i], d[j], kme(i, j));
+            }
     }
     if (tangent) {
         tangent->resize(model.dof_count(), model.dof_count());
         tangent->setFromTriplets(t.begin(), t.end());
+    }
+    if (material) {
+        material->resize(model.dof_count(), model.dof_count());
+        material->setFromTriplets(tm.begin(), tm.end());
     }
     if (strain_energy) *strain_energy = energy;
     return f;

@@ -77,7 +77,7 @@ Vec6 uniform_load(const Element& e, const Vec2& q, double beta) {
 }
 
 CorotationalState corotational_element(const Element& e, const Vec2& x1, const Vec2& x2, const Vec6& d, Vec6& force,
-                                       Mat6* tangent) {
+                                       Mat6* tangent, Mat6* material) {
     CorotationalState s;
     const Vec2 X = x2 - x1;                         // reference chord
     const Vec2 du(d[3] - d[0], d[4] - d[1]);        // relative translation
@@ -108,11 +108,13 @@ CorotationalState corotational_element(const Element& e, const Vec2& x1, const V
     B(1, 2) += 1.0;
     B(2, 5) += 1.0;
     force = B.transpose() * Eigen::Vector3d(s.N, s.M1, s.M2);
-    if (tangent) {
+    if (tangent || material) {
         Eigen::Matrix3d kl;
         kl << e.EA / L0, 0, 0, 0, 4 * k, 2 * k, 0, 2 * k, 4 * k;
-        *tangent = B.transpose() * kl * B + (s.N / L) * z * z.transpose() +
-                   ((s.M1 + s.M2) / (L * L)) * (r * z.transpose() + z * r.transpose());
+        const Mat6 km = B.transpose() * kl * B;
+        if (material) *material = km;
+        if (tangent)
+            *tangent = km + (s.N / L) * z * z.transpose() + ((s.M1 + s.M2) / (L * L)) * (r * z.transpose() + z * r.transpose());
     }
     return s;
 }

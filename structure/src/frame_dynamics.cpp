@@ -84,6 +84,13 @@ void FrameDynamics::setup_damping() {
     }
 }
 
+SparseMatrix FrameDynamics::damping(const Vector& u) const {
+    if (!turning_damping()) return D_;
+    SparseMatrix material;
+    corotational_internal_force(model_, u, nullptr, nullptr, &material);
+    return rayleigh_alpha_ * M_ + rayleigh_beta_ * material;
+}
+
 void FrameDynamics::reset(double t0) {
     const int n = model_.dof_count();
     state_ = State{};
@@ -121,7 +128,7 @@ Vector FrameDynamics::internal_force(const Vector& u, SparseMatrix* tangent, dou
 }
 
 void FrameDynamics::equilibrate_acceleration(const Vector& extra) {
-    Vector f = scene_load(state_.t) - D_ * state_.v - internal_force(state_.u);
+    Vector f = scene_load(state_.t) - damping(state_.u) * state_.v - internal_force(state_.u);
     if (extra.size()) f += extra;
     Eigen::SimplicialLDLT<SparseMatrix> mass(reduce(M_));
     if (mass.info() != Eigen::Success) throw SolverError("internal", "structure: mass matrix is not positive definite");
@@ -178,16 +185,17 @@ StepReport FrameDynamics::step(double h, const Vector& extra) {
     // The part of the weighted balance that belongs to time n (zero for backward Euler / Newmark).
     Vector rest = Vector::Zero(un.size());
     if (am != 0.0) rest += am * (M_ * an);
-    if (af != 0.0) rest += af * (D_ * vn + internal_force(un) - fe0);
+    if (af != 0.0) rest += af * (damping(un) * vn + internal_force(un) - fe0);
 
     Vector u = un, v1, a1, fint;
-    SparseMatrix Kt;
+    SparseMatrix Kt, D1 = D_;  // D1: the damping matrix at u (it turns with co-rotational elements)
     auto residual = [&](double& scale, bool want_tangent) {
         const Vector du = u - un;
         a1 = c.c0 * du - c.c1 * vn - c.c2 * an;
         v1 = c.c3 * du + c.c4 * vn + c.c5 * an;
         fint = internal_force(u, want_tangent ? &Kt : nullptr);
-        const Vector inertia = (1.0 - am) * (M_ * a1), damping = (1.0 - af) * (D_ * v1);
+        if (turning_damping()) D1 = damping(u);
+        const Vector inertia = (1.0 - am) * (M_ * a1), damping = (1.0 - af) * (D1 * v1);
         const Vector R = inertia + damping + (1.0 - af) * (fint - fe1) + rest;
         scale = std::max({reduce(inertia).norm(), reduce(damping).norm(), reduce(fint).norm(), reduce(fe1).norm(),
                           reduce(rest).norm()});
@@ -195,7 +203,9 @@ StepReport FrameDynamics::step(double h, const Vector& extra) {
     };
     auto effective = [&](const SparseMatrix& K) {
         SparseMatrix S = (1.0 - am) * c.c0 * M_ + (1.0 - af) * K;
-        if (config_.damping.kind != DampingKind::None) S += (1.0 - af) * c.c3 * D_;
+        // The damping force's change with the elements' turning, (dD/du) v, is left out of the tangent: with
+        // it Newton would converge quadratically, without it still converges (beta is small).
+        if (config_.damping.kind != DampingKind::None) S += (1.0 - af) * c.c3 * D1;
         return reduce(S);
     };
 

@@ -9,8 +9,10 @@ namespace sphfsi::structure {
 SparseMatrix assemble_linear_stiffness(const Model& model);
 SparseMatrix assemble_mass(const Model& model, MassKind kind);
 
-// Co-rotational internal force at displacement u; tangent and strain energy when asked for.
-Vector corotational_internal_force(const Model& model, const Vector& u, SparseMatrix* tangent, double* strain_energy);
+// Co-rotational internal force at displacement u; tangent, strain energy and the tangent's material part
+// (corotational_element) when asked for.
+Vector corotational_internal_force(const Model& model, const Vector& u, SparseMatrix* tangent, double* strain_energy,
+                                   SparseMatrix* material = nullptr);
 
 // Current chord angle of every element (reference angle when `u` is empty).
 std::vector<double> element_angles(const Model& model, const Vector& u);

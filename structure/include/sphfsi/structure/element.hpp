@@ -40,9 +40,11 @@ struct CorotationalState {
     double strain_energy = 0;
 };
 // `x1`, `x2` reference positions; `d` the element's global displacements. Fills the internal force
-// vector and, when `tangent` is given, the consistent (material + geometric) tangent.
+// vector and, when `tangent` is given, the consistent (material + geometric) tangent; when `material` is
+// given, the material part alone, B^T k_l B: the stiffness of the element's deformation in its current
+// orientation, which rigid motions do not strain (what stiffness-proportional damping multiplies).
 CorotationalState corotational_element(const Element& e, const Vec2& x1, const Vec2& x2, const Vec6& d, Vec6& force,
-                                       Mat6* tangent);
+                                       Mat6* tangent, Mat6* material = nullptr);
 
 // Wraps an angle to (-pi, pi].
 double wrap_angle(double a);

@@ -40,7 +40,9 @@ public:
     const Model& model() const { return model_; }
     const SparseMatrix& mass() const { return M_; }
     const SparseMatrix& stiffness() const { return K0_; }  // linear stiffness, reference configuration
-    const SparseMatrix& damping() const { return D_; }
+    // The damping matrix at displacement u: alpha M + beta K, K the linear stiffness, or for co-rotational
+    // elements the material stiffness in their current orientation (a rigid rotation is not damped).
+    SparseMatrix damping(const Vector& u) const;
     const Modes& modes() const { return modes_; }
     double rayleigh_alpha() const { return rayleigh_alpha_; }
     double rayleigh_beta() const { return rayleigh_beta_; }
@@ -75,6 +77,8 @@ public:
 
 private:
     bool linear() const { return config_.formulation == Formulation::Linear; }
+    // Stiffness-proportional damping of co-rotational elements turns with them.
+    bool turning_damping() const { return !linear() && rayleigh_beta_ > 0.0; }
     Vector reduce(const Vector& full) const { return model_.T.transpose() * full; }
     SparseMatrix reduce(const SparseMatrix& full) const { return model_.T.transpose() * full * model_.T; }
     void check_finite(const Vector& x, const char* quantity) const;
@@ -84,7 +88,7 @@ private:
 
     StructureConfig config_;
     Model model_;
-    SparseMatrix M_, K0_, D_;
+    SparseMatrix M_, K0_, D_;  // D_: the damping matrix unless it turns with the elements (damping(u))
     SceneLoads loads_;
     Modes modes_;
     double rayleigh_alpha_ = 0, rayleigh_beta_ = 0;
