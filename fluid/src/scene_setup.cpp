@@ -104,4 +104,10 @@ std::vector<Vec2> gate_particles(const FluidSettings& s) {
     return out;
 }
 
+bool inside_tank(const WallGeometry& g, const Vec2& p) {
+    const double tol = 1e-9 * std::max(g.width, g.height);
+    return (!g.walls_x || (p[0] > tol && p[0] < g.width - tol)) && (!g.floor || p[1] > tol) &&
+           (!g.lid || p[1] < g.height - tol);
+}
+
 }  // namespace sphfsi::fluid

@@ -221,13 +221,8 @@ void Simulation2D::add_solids(const std::vector<V>& reference, const std::vector
 void Simulation2D::set_solid_section(std::string name, std::vector<SolidSection::Quad> cells, const std::vector<V>& reference,
                                      SolidSection::Vertices vertices) {
     const WallGeometry g = geometry_;
-    const double tol = 1e-9 * std::max(g.width, g.height);
-    auto in_tank = [g, tol](const V& a, const V& b) {
-        const V m = (a + b) * 0.5;
-        return (!g.walls_x || (m[0] > tol && m[0] < g.width - tol)) && (!g.floor || m[1] > tol) &&
-               (!g.lid || m[1] < g.height - tol);
-    };
-    section_ = SolidSection(std::move(name), std::move(cells), reference, std::move(vertices), in_tank, g.thickness, s_.dp);
+    section_ = SolidSection(std::move(name), std::move(cells), reference, std::move(vertices),
+                            [g](const V& p) { return inside_tank(g, p); }, g.thickness, s_.dp);
 }
 
 }  // namespace sphfsi::fluid

@@ -146,7 +146,7 @@ double Simulation2D::check_state() {
     if (g.floor && x[1] < -g.thickness) fail(i, "y", x[1], "below the outer face of the floor at y = " + fmt(-g.thickness) + " m: lost through the wall");
     if (g.lid && x[1] > g.height + g.thickness) fail(i, "y", x[1], "above the outer face of the lid at y = " + fmt(g.height + g.thickness) + " m: lost through the wall");
     if (section_.on() && section_.lost(x))
-        fail(i, "position", x[0], "inside " + section_.name() + ", deeper below its faces than its solid particles reach: lost through it (y = " + fmt(x[1]) + " m)");
+        fail(i, "position", x[0], "inside " + section_.name() + ", deeper below its faces than a wall's rule allows: lost through it (y = " + fmt(x[1]) + " m)");
     fail(i, "position", x[0], "inside an obstacle, deeper than its wall layers: lost through the wall (y = " + fmt(x[1]) + " m)");
 }
 

@@ -29,6 +29,10 @@ Vec2 foot_on(const Vec2& a, const Vec2& b, const Vec2& x, double& u) {
     return a + e * std::clamp(u, 0.0, 1.0);
 }
 
+// How far past a boundary point the union is probed to see whether it goes on (1e-6 dp: far above the
+// round-off of coordinates of a few metres, far below anything a particle resolves).
+double probe_step(double dp) { return 1e-6 * dp; }
+
 }  // namespace
 
 SolidSection::SolidSection(std::string name, std::vector<Quad> cells, const std::vector<Vec2>& reference,
@@ -83,19 +87,21 @@ void SolidSection::place(double t) {
             hi_[k] = std::max(hi_[k], v[k]);
         }
     placed_faces_.clear();
-    for (const auto& f : faces_) {
-        const Vec2 a = at_[static_cast<std::size_t>(f[0])], b = at_[static_cast<std::size_t>(f[1])];
-        placed_faces_.push_back({a, b, !touchable_ || touchable_(a, b)});
-    }
-    // Bins at least as wide as the farthest a face can matter (2 L + dp), wider where the section is so large
-    // that those would number more than 2^20.
-    bin_ = 2.0 * layers_ + dp_;
+    for (const auto& f : faces_) placed_faces_.push_back({at_[static_cast<std::size_t>(f[0])], at_[static_cast<std::size_t>(f[1])]});
+    // Bins a quarter of the farthest a face can matter (2 L + dp) wide, wider where the section is so large
+    // that those would number more than 2^20 (counted in doubles: a vertex flung 1e8 m away must not overflow).
+    const double reach = 2.0 * layers_ + dp_;
+    bin_ = 0.25 * reach;
+    double nx = 1.0, ny = 1.0;
     for (;;) {
-        nx_ = static_cast<int>(std::floor((hi_[0] - lo_[0]) / bin_)) + 1;
-        ny_ = static_cast<int>(std::floor((hi_[1] - lo_[1]) / bin_)) + 1;
-        if (static_cast<double>(nx_) * ny_ <= double(1 << 20)) break;
+        nx = std::floor((hi_[0] - lo_[0]) / bin_) + 1.0;
+        ny = std::floor((hi_[1] - lo_[1]) / bin_) + 1.0;
+        if (!(nx * ny > double(1 << 20))) break;  // also leaves the loop on a non-finite extent
         bin_ *= 2.0;
     }
+    if (!std::isfinite(nx * ny)) nx = ny = 1.0, bin_ = std::numeric_limits<double>::infinity();
+    nx_ = static_cast<int>(nx), ny_ = static_cast<int>(ny);
+    reach_ = std::max(1, static_cast<int>(std::ceil(reach / bin_)));
     fill(cell_bins_, cells_.size(), [&](std::size_t i, Vec2& lo, Vec2& hi) {
         lo = hi = at_[static_cast<std::size_t>(cells_[i][0])];
         for (std::int32_t v : cells_[i])
@@ -114,12 +120,16 @@ void SolidSection::place(double t) {
 }
 
 std::array<int, 2> SolidSection::bin_of(const Vec2& x) const {
-    return {std::clamp(static_cast<int>(std::floor((x[0] - lo_[0]) / bin_)), 0, nx_ - 1),
-            std::clamp(static_cast<int>(std::floor((x[1] - lo_[1]) / bin_)), 0, ny_ - 1)};
+    auto along = [&](int k, int n) {
+        const double b = std::floor((x[k] - lo_[k]) / bin_);
+        return b < 0.0 ? 0 : b >= n - 1 ? n - 1 : static_cast<int>(b);  // clamped before the cast
+    };
+    return {along(0, nx_), along(1, ny_)};
 }
 
 bool SolidSection::inside(const Vec2& x) const {
-    if (nx_ == 0 || x[0] < lo_[0] || x[0] > hi_[0] || x[1] < lo_[1] || x[1] > hi_[1]) return false;  // not placed, or outside
+    // Written so that a NaN coordinate is outside; not placed yet: nothing is inside.
+    if (nx_ == 0 || !(x[0] >= lo_[0] && x[0] <= hi_[0] && x[1] >= lo_[1] && x[1] <= hi_[1])) return false;
     const auto b = bin_of(x);
     const std::size_t k = static_cast<std::size_t>(b[1]) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(b[0]);
     for (std::uint32_t i = cell_bins_.start[k]; i < cell_bins_.start[k + 1]; ++i) {
@@ -131,30 +141,47 @@ bool SolidSection::inside(const Vec2& x) const {
     return false;
 }
 
-// Whether the centre x, `depth` below a face at `foot`, is within what that face allows: the thickness is
-// measured on along the line from the foot through x to the first face it meets.
+// A face's point is the solid's surface when the union does not go on just beyond it (an overlapped face at
+// a joint of two members is not), and water can touch it when it is inside the tank.
+bool SolidSection::surface_at(const Vec2& foot, const Vec2& inward) const {
+    return !inside(foot - inward * probe_step(dp_)) && (!touchable_ || touchable_(foot));
+}
+
+// Whether the centre x, `depth` below a surface point `foot`, is within what that face allows: the thickness
+// is measured on along the line from the foot through x to where the union ends.
 bool SolidSection::at_a_face(const Vec2& x, const Vec2& foot, double depth, const std::vector<std::uint32_t>& near) const {
     const Vec2 n = (x - foot) * (1.0 / depth);
-    double beyond = std::numeric_limits<double>::infinity();
+    const double reach = 2.0 * layers_ + dp_;  // beyond this thickness the allowance is L whatever it is
+    thread_local std::vector<double> hits;
+    hits.clear();
     for (std::uint32_t i : near) {
         const Face& f = placed_faces_[i];
         const Vec2 e = f.b - f.a, r = f.a - x;
         const double denom = cross(n, e);
         if (denom == 0.0) continue;  // along the line: it meets the line's ends' faces instead
         const double s = cross(r, e) / denom, w = cross(r, n) / denom;
-        if (s > 0.0 && w >= 0.0 && w <= 1.0) beyond = std::min(beyond, s);
+        if (s > 0.0 && s < reach && w >= 0.0 && w <= 1.0) hits.push_back(s);
     }
+    std::sort(hits.begin(), hits.end());
+    double beyond = std::numeric_limits<double>::infinity();
+    for (double s : hits)
+        if (!inside(x + n * (s + probe_step(dp_)))) {  // the union ends here, not just an overlapped face
+            beyond = s;
+            break;
+        }
     const double across = depth + beyond;
     const double allowed = std::min(layers_, std::max(0.5 * (across - dp_), 0.5 * dp_));
     return depth <= allowed;
 }
 
-// The faces within reach of x: those binned in the 3 x 3 bins around it.
-std::vector<std::uint32_t> SolidSection::faces_near(const Vec2& x) const {
-    std::vector<std::uint32_t> near;
+// The faces binned within `bins` bins of x's, in a scratch list of the calling thread: lost() runs inside
+// the parallel check, for every centre inside the section, every step.
+const std::vector<std::uint32_t>& SolidSection::faces_near(const Vec2& x, int bins) const {
+    thread_local std::vector<std::uint32_t> near;
+    near.clear();
     const auto b = bin_of(x);
-    for (int y = std::max(b[1] - 1, 0); y <= std::min(b[1] + 1, ny_ - 1); ++y)
-        for (int bx = std::max(b[0] - 1, 0); bx <= std::min(b[0] + 1, nx_ - 1); ++bx) {
+    for (int y = std::max(b[1] - bins, 0); y <= std::min(b[1] + bins, ny_ - 1); ++y)
+        for (int bx = std::max(b[0] - bins, 0); bx <= std::min(b[0] + bins, nx_ - 1); ++bx) {
             const std::size_t k = static_cast<std::size_t>(y) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(bx);
             near.insert(near.end(), face_bins_.items.begin() + face_bins_.start[k], face_bins_.items.begin() + face_bins_.start[k + 1]);
         }
@@ -165,34 +192,56 @@ std::vector<std::uint32_t> SolidSection::faces_near(const Vec2& x) const {
 
 bool SolidSection::past_surface(const Vec2& x, double tol) const {
     if (!inside(x)) return false;
-    for (std::uint32_t i : faces_near(x)) {
+    for (std::uint32_t i : faces_near(x, 1)) {  // bins are wider than tol (0.1 dp)
         const Face& f = placed_faces_[i];
         double u = 0.0;
-        if (f.touchable && norm(x - foot_on(f.a, f.b, x, u)) <= tol) return false;
+        const Vec2 foot = foot_on(f.a, f.b, x, u);
+        const double depth = norm(x - foot);
+        if (depth == 0.0) return false;  // on the face
+        if (depth <= tol && surface_at(foot, (x - foot) * (1.0 / depth))) return false;
     }
     return true;
 }
 
 bool SolidSection::lost(const Vec2& x) const {
     if (!inside(x)) return false;
-    const std::vector<std::uint32_t> near = faces_near(x);
     constexpr double over = 1e-9;  // a centre over a shared corner lies over both faces
-    double nearest = std::numeric_limits<double>::infinity();
-    Vec2 nearest_foot{};
-    bool nearest_is_corner = false;
-    for (std::uint32_t i : near) {
+    // A centre no deeper than dp/2 below a surface point is at a face whatever the thickness (the allowance
+    // is at least dp/2). That settles the common case, a centre just past a face, from the faces of the 3 x 3
+    // bins around it (bins are wider than dp/2) with one probe.
+    for (std::uint32_t i : faces_near(x, 1)) {
         const Face& f = placed_faces_[i];
-        if (!f.touchable) continue;
         double u = 0.0;
         const Vec2 foot = foot_on(f.a, f.b, x, u);
         const double depth = norm(x - foot);
         if (depth == 0.0) return false;  // on the face
-        const bool over_face = u >= -over && u <= 1.0 + over;
-        if (over_face && depth <= layers_ && at_a_face(x, foot, depth, near)) return false;
-        if (depth < nearest) nearest = depth, nearest_foot = foot, nearest_is_corner = !over_face;
+        if (depth <= 0.5 * dp_ && surface_at(foot, (x - foot) * (1.0 / depth))) return false;
     }
-    // A centre over no face near it (beside a corner that turns into the solid) is measured from that corner.
-    if (nearest_is_corner && nearest <= layers_ && at_a_face(x, nearest_foot, nearest, near)) return false;
+    // Deeper: the face points within L, nearest first, each measured across the section.
+    const std::vector<std::uint32_t>& near = faces_near(x, reach_);
+    struct Candidate {
+        double depth;
+        Vec2 foot;
+        bool over_face;  // x lies over the face (else its nearest point on it is a corner)
+    };
+    thread_local std::vector<Candidate> candidates;
+    candidates.clear();
+    for (std::uint32_t i : near) {
+        const Face& f = placed_faces_[i];
+        double u = 0.0;
+        const Vec2 foot = foot_on(f.a, f.b, x, u);
+        const double depth = norm(x - foot);
+        if (depth <= layers_) candidates.push_back({depth, foot, u >= -over && u <= 1.0 + over});
+    }
+    std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) { return a.depth < b.depth; });
+    bool nearest = true;
+    for (const Candidate& c : candidates) {
+        if (!surface_at(c.foot, (x - c.foot) * (1.0 / c.depth))) continue;
+        // A centre over no face near it (beside a corner that turns into the solid) is measured from that
+        // corner, when it is the nearest surface point.
+        if ((c.over_face || nearest) && at_a_face(x, c.foot, c.depth, near)) return false;
+        nearest = false;
+    }
     return true;
 }
 

@@ -8,11 +8,15 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
+#include "sphfsi/fluid/scene_setup.hpp"
 #include "sphfsi/fluid/solid_section.hpp"
 
+using sphfsi::fluid::inside_tank;
 using sphfsi::fluid::SolidSection;
+using sphfsi::fluid::WallGeometry;
 using sphfsi::fluid::Vec2;
 
 namespace {
@@ -129,9 +133,53 @@ TEST_SUITE("solid_section") {
         const Mesh block = rectangle(0.02, 0.0, 0.04, 0.02, 4, 2);
         const Vec2 x{{0.04, 0.2 * dp}};
         CHECK_FALSE(section(block).lost(x));
-        const auto on_floor = section(block, 0.0, [](const Vec2& a, const Vec2& b) { return 0.5 * (a[1] + b[1]) > 1e-12; });
+        const auto on_floor = section(block, 0.0, [](const Vec2& p) { return p[1] > 1e-12; });
         CHECK(on_floor.lost(x));
         CHECK_FALSE(on_floor.lost(Vec2{{0.04, 0.02 - 0.5 * L}}));  // near its top, which the water touches
+    }
+
+    TEST_CASE("a plate set into a side wall: where its faces are in the water, the water touches them") {
+        // A 1.25-dp plate from x = -15 mm (inside the left wall) into a tank 0.5 m wide, elements 25 mm long:
+        // the first element's long faces run from -15 to +10 mm, more than half of them in the wall. Judged by
+        // the tank's own rule (inside_tank) at the point measured from, the part in the water is a face.
+        WallGeometry tank;
+        tank.width = 0.5, tank.height = 0.3, tank.thickness = L;
+        const double t = 1.25 * dp;
+        const auto s = section(rectangle(-0.015, 0.1, 0.2, t, 8, 1), 0.0, [tank](const Vec2& p) { return inside_tank(tank, p); });
+        CHECK_FALSE(s.lost(Vec2{{0.007, 0.1 + t - 0.4 * dp}}));  // 0.4 dp under the top face, over the first element
+        CHECK(s.lost(Vec2{{0.007, 0.1 + 0.5 * t}}));              // at its middle
+        // In the wall, the plate's end face is not the water's: a centre there is past no face of the water.
+        CHECK(s.lost(Vec2{{-0.0145, 0.1 + 0.5 * t}}));
+    }
+
+    TEST_CASE("the members of a frame meeting at a joint: overlapped faces are not surfaces") {
+        // A beam mesh per member, as the structure publishes it: a horizontal member 10 dp thick and a stem
+        // 5 dp thick rising from its centreline at x = 0.1, each with its own cells, which overlap at the joint.
+        const double a = 10 * dp, b = 5 * dp;
+        const Mesh member = rectangle(0.0, -0.5 * a, 0.2, a, 20, 1), stem = rectangle(0.1 - 0.5 * b, 0.0, b, 0.1, 10, 1);
+        const auto s = section(joined(member, stem));
+        // On the member's centreline under the stem: 5 dp below the water, the stem's end face 0.1 dp away
+        // lies inside the member (before: saved by it, a missed leak).
+        CHECK(s.lost(Vec2{{0.1, -0.1 * dp}}));
+        CHECK(section(member).lost(Vec2{{0.1, -0.1 * dp}}));
+        // A 4-dp member under the stem: 1.2 dp above its bottom face the section is thick (member and stem);
+        // the stem's end face across the member must not halve the thickness (before: a false stop).
+        const double c = 4 * dp;
+        const auto thin = section(joined(rectangle(0.0, -0.5 * c, 0.2, c, 20, 1), stem));
+        for (double above : {0.6, 0.9, 1.2}) CHECK_FALSE(thin.lost(Vec2{{0.1, -0.5 * c + above * dp}}));
+        // Where the stem meets the member's top face, that face is covered; beside the stem it is the water's.
+        CHECK_FALSE(s.lost(Vec2{{0.1 + 0.5 * b + 0.5 * dp, 0.5 * a - 0.4 * dp}}));
+    }
+
+    TEST_CASE("far-flung vertices and non-finite centres are handled, not undefined") {
+        Mesh m = rectangle(0.0, 0.0, 0.1, 10 * dp, 10, 1);
+        m.vertices.push_back(Vec2{{1e8, 1e8}});  // no cell uses it; it only stretches the bounding box
+        const auto s = section(m);
+        CHECK(s.lost(Vec2{{0.05, 5 * dp}}));
+        CHECK_FALSE(s.lost(Vec2{{0.05, 11 * dp}}));
+        const double nan = std::numeric_limits<double>::quiet_NaN();
+        CHECK_FALSE(s.lost(Vec2{{nan, 5 * dp}}));
+        CHECK_FALSE(s.past_surface(Vec2{{0.05, nan}}, 0.1 * dp));
     }
 
     TEST_CASE("the section is checked where it is at the time it is placed") {

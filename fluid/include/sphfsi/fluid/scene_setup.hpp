@@ -28,4 +28,8 @@ struct Scene2D {
 
 Scene2D build_scene(const FluidSettings& s);
 
+// Whether p is inside the tank's interior, off its wall surfaces (by 1e-9 of the tank's size): where water can
+// touch a solid's face.
+bool inside_tank(const WallGeometry& g, const Vec2& p);
+
 }  // namespace sphfsi::fluid

@@ -49,8 +49,8 @@ public:
                     const std::function<bool(const V&)>& inside_solid);
     void set_solid_kinematics(SolidKinematics kinematics) { kinematics_ = std::move(kinematics); }
     // The solid particles' cross-section as cells of `reference` vertices, placed at time t by `vertices`:
-    // a fluid centre deep inside it stops the run as lost through `name` (solid_section.hpp). Its faces
-    // outside the tank's interior are not ones the water can touch.
+    // a fluid centre deep inside it stops the run as lost through `name` (solid_section.hpp). Where its
+    // faces are outside the tank's interior, the water does not touch them.
     void set_solid_section(std::string name, std::vector<SolidSection::Quad> cells, const std::vector<V>& reference,
                            SolidSection::Vertices vertices);
 
