@@ -30,6 +30,7 @@
 #include <cstdio>
 #include <functional>
 #include <numbers>
+#include <utility>
 
 #include "run_helpers.hpp"
 #include "scenes.hpp"
@@ -85,8 +86,14 @@ void check_against(sphfsi::fluid::SphSolver& s, const char* name, const std::vec
 
 TEST_SUITE("channel_flows") {
     TEST_CASE("Poiseuille flow (Morris et al. 1997)") {
+        // Morris's laminar viscosity at L/20, and the thesis's Laplacian of Mueller's viscosity kernel at
+        // L/40: its estimate sum_j V_j (v_j - v_i) lap W_ij needs twice the resolution for the same 2 %
+        // (measured 2026-11-27: 1.7 - 2.6 % at L/20 and 0.6 - 1.0 % at L/40, where Morris's gives 0.8 - 1.3 %
+        // and 0.3 - 0.5 %; before its constant was normalised on the lattice, 7.0 % at L/20).
+        for (const auto& [model, n] : {std::pair{"morris", 20.0}, std::pair{"mueller", 40.0}}) {
+        CAPTURE(model);
         const double L = 1e-3, nu = 1e-6, F = 2e-4;
-        Value f = channel(L, L / 20, L / 2);
+        Value f = with(channel(L, L / n, L / 2), {{"viscosity.model", model}});
         f.as_table_mut()["gravity"] = vec2(F, 0.0);
         auto s = start(f);
         auto exact = [&](double y, double t) {
@@ -97,7 +104,8 @@ TEST_SUITE("channel_flows") {
             }
             return u;
         };
-        check_against(*s, "Poiseuille", {0.0225, 0.045, 0.1125, 0.225, 1.0}, exact, 0.02);
+        check_against(*s, model, {0.0225, 0.045, 0.1125, 0.225, 1.0}, exact, 0.02);
+        }
     }
 
     TEST_CASE("Couette flow (Morris et al. 1997)") {

@@ -16,6 +16,7 @@ struct ViscosityParams {
     double eta2 = 0.0;    // 0.01 h^2: keeps mu_ij finite for close pairs (Monaghan's artificial viscosity)
     double eta2_laminar = 0.0;  // 0.001 h^2 for Morris: 0.01 h^2 would weaken the nearest-neighbour terms
                                 // (r = dp = h/1.5) by 2 %, a 2 % error in every viscous flow
+    double laplacian_scale = 1.0;  // Mueller: 2 Dim / sum_lattice V r^2 lap W (Simulation2D's constructor)
 };
 
 // Monaghan (1992) artificial viscosity: Pi_ij = -alpha c0 mu_ij / rho_ij for approaching pairs, with
@@ -36,7 +37,7 @@ inline double morris_viscosity_factor(const ViscosityParams& p, double F, double
 // Mueller et al. (2003): a_i += nu m_j (v_j - v_i) lap W_visc / rho, symmetrised with 2/(rho_i + rho_j).
 // Returns the factor on v_ij (= v_i - v_j), hence the minus sign.
 inline double mueller_viscosity_factor(const ViscosityParams& p, double laplacian, double rho_i, double rho_j) {
-    return -2.0 * p.nu * laplacian / (rho_i + rho_j);
+    return -2.0 * p.nu * p.laplacian_scale * laplacian / (rho_i + rho_j);
 }
 
 }  // namespace sphfsi::fluid
