@@ -66,7 +66,7 @@ public:
     StepReport step(double h, const Vector& extra);
 
     // Static equilibrium f_int(u) = load(u) from the current u, in `increments` equal load increments
-    // (halved on failure); `load` is evaluated on the configuration at the start of each increment.
+    // (halved on failure); `load` is evaluated on each Newton iterate's configuration.
     // Sets v = 0 and returns the Newton iterations used.
     int solve_static(const std::function<Vector(const Vector&)>& load, int increments);
 
