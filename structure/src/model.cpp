@@ -104,7 +104,7 @@ Model build_model(const StructureConfig& config) {
             case SupportType::Pinned: t.emplace_back(3 * i + 2, col++, 1.0); break;
             case SupportType::Roller: {
                 Vec2 nrm(support[i]->normal[0], support[i]->normal[1]);
-                nrm.normalize();
+                nrm.stableNormalize();  // normalize() leaves [1e-200, 0] as it is: its squared norm underflows
                 // Free to move along the surface tangent (ny, -nx) only.
                 if (nrm.y() != 0.0) t.emplace_back(3 * i, col, nrm.y());
                 if (nrm.x() != 0.0) t.emplace_back(3 * i + 1, col, -nrm.x());

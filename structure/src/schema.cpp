@@ -313,7 +313,7 @@ TableSchema build() {
         .less_than(1).fallback(Value::Array{0.02, 0.02});
     damp.vector("frequencies", 2,
                 "rayleigh: the two frequencies f1 < f2; absent = the 1st and the time.resolved_modes-th "
-                "natural frequency (the 2nd when resolved_modes = 1)")
+                "natural frequency (the 2nd when resolved_modes = 1; the next one computed if that equals the 1st)")
         .unit("Hz").greater_than(0);
     damp.check([](const Value& t, const std::string& path, Errors& errors) {
         if (const Value* f = t.find("frequencies")) {
@@ -335,7 +335,7 @@ TableSchema build() {
     time.integer("resolved_modes", "the accuracy limit on the step resolves this many lowest elastic modes")
         .at_least(1).at_most(50).fallback(3);
     time.number("steps_per_period", "accuracy limit: at least this many steps per period of the highest resolved mode")
-        .at_least(2).fallback(20.0);
+        .at_least(2).at_most(1e6).fallback(20.0);
     time.number("max_numerical_damping",
                 "backward_euler only: largest algorithmic damping ratio ln(1+W^2)/(2 atan W), W = omega dt, "
                 "tolerated in the highest resolved mode")

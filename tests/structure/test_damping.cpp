@@ -120,6 +120,35 @@ TEST_CASE("co-rotational Rayleigh damping damps deformation, not rigid rotation"
     }
 }
 
+TEST_CASE("Rayleigh's default frequencies are two distinct ones, also for identical parts") {
+    // Two equal cantilevers: their modes come in equal pairs. The defaults are modes 1 and resolved_modes;
+    // with resolved_modes = 2 both are the first frequency, which has nothing to match a pair to.
+    Value s = beam(10);
+    set(s, "members", Value(Value::Array{table({{"start", vec(0, 0)}, {"end", vec(L, 0)}, {"n_elements", Value(10)}}),
+                                         table({{"start", vec(0, 1)}, {"end", vec(L, 1)}, {"n_elements", Value(10)}})}));
+    set(s, "supports", Value(Value::Array{table({{"at", vec(0, 0)}, {"type", Value("clamped")}}),
+                                          table({{"at", vec(0, 1)}, {"type", Value("clamped")}})}));
+    set(s, "damping.model", Value("rayleigh"));
+    set(s, "time.resolved_modes", Value(2));
+    std::string what;
+    try {
+        FrameDynamics f(config(s));
+    } catch (const sphfsi::protocol::SolverError& e) {
+        what = e.what();
+        CHECK(e.code() == "bad_config");
+    }
+    MESSAGE(what);
+    CHECK(what.find("structure.damping.frequencies") != std::string::npos);
+    // With three resolved modes the second frequency is the single cantilever's second: the target ratio
+    // holds at both (0.02 each, the default ratios).
+    set(s, "time.resolved_modes", Value(3));
+    const FrameDynamics f(config(s));
+    const double w1 = f.modes().omega(0), w2 = f.modes().omega(2);
+    CHECK(rel(w2, w1) > 1.0);
+    CHECK(f.rayleigh_alpha() / (2 * w1) + f.rayleigh_beta() * w1 / 2 == doctest::Approx(0.02).epsilon(1e-9));
+    CHECK(f.rayleigh_alpha() / (2 * w2) + f.rayleigh_beta() * w2 / 2 == doctest::Approx(0.02).epsilon(1e-9));
+}
+
 TEST_CASE("Rayleigh with explicit frequencies") {
     Value s = beam(10);
     const FrameDynamics plain(config(s));

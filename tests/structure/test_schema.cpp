@@ -60,6 +60,10 @@ TEST_CASE("types, ranges and unknown keys are reported with their dotted path") 
     set(s, "members", Value(Value::Array{table({{"start", vec(0, 0)}, {"end", vec(L, 0)}, {"n_elements", Value(3000)}}),
                                          table({{"start", vec(L, 0)}, {"end", vec(2 * L, 0)}, {"n_elements", Value(2000)}})}));
     CHECK(mentions(problem(s), "key 'structure.members': 5000 elements in all; allowed: at most 4000"));
+    // 1e300 steps per period used to pass and then fail blaming time.dt_max.
+    s = beam(10);
+    set(s, "time.steps_per_period", Value(1e300));
+    CHECK(mentions(problem(s), "key 'structure.time.steps_per_period'"));
 }
 
 TEST_CASE("supports and point loads must sit on nodes") {

@@ -81,8 +81,8 @@ private:
     bool turning_damping() const { return !linear() && rayleigh_beta_ > 0.0; }
     Vector reduce(const Vector& full) const { return model_.T.transpose() * full; }
     SparseMatrix reduce(const SparseMatrix& full) const { return model_.T.transpose() * full * model_.T; }
-    void check_finite(const Vector& x, const char* quantity) const;
-    void check_bounded(const Vector& u) const;
+    void check_finite(const Vector& x, const char* quantity, double t) const;
+    void check_bounded(const Vector& u, double t) const;
     static bool round_off_floor(int iteration, double norm, double previous, double scale, double tol);
     void setup_damping();
 
