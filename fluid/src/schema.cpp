@@ -174,12 +174,16 @@ void check_combinations(const Value& fluid, const std::string& path, Errors& err
                               " m); allowed: at least " + std::to_string(needed));
     if ((periodic == "y" || periodic == "xy") && tank.at("closed_top").as_bool())
         errors.add(&tank, "key '" + key(path, "tank.closed_top") + "': a tank periodic in y has no bottom or top wall");
-    if (model == "wcsph" && pressure.at("c0").as_double() == 0.0 && pressure.at("u_max").as_double() == 0.0) {
+    // WCSPH's equation of state needs c0; so does artificial viscosity (alpha c0) with PCISPH, which would
+    // otherwise run with none, silently (a review).
+    const bool needs_c0 = model == "wcsph" || (model == "pcisph" && fluid.at("viscosity").at("model").as_string() == "artificial");
+    if (needs_c0 && pressure.at("c0").as_double() == 0.0 && pressure.at("u_max").as_double() == 0.0) {
         const auto g = fluid.at("gravity").as_doubles();
         const Value* water = fluid.find("water");
         if (std::hypot(g[0], g[1]) == 0.0 || !water || water->as_array().empty())
-            errors.add(&pressure, "key '" + key(path, "pressure.c0") +
-                                      "': c0 cannot be estimated without gravity and water; set pressure.c0 or pressure.u_max");
+            errors.add(&pressure, "key '" + key(path, "pressure.c0") + "': c0 cannot be estimated without gravity and water" +
+                                      (model == "pcisph" ? " (artificial viscosity scales with it)" : "") +
+                                      "; set pressure.c0 or pressure.u_max");
     }
     const Value& failure = fluid.at("failure");
     if (num(failure, "min_density_ratio") >= num(failure, "max_density_ratio"))
@@ -352,7 +356,7 @@ TableSchema build() {
 
     TableSchema& surface = s.table("free_surface", "free-surface detection and wind stress");
     surface.number("threshold", "a particle is on the free surface when the divergence of position (2 inside the "
-                                "fluid, in 2D) is below this")
+                                "fluid, in 2D) is below this (a 3D build scales it by 3/2)")
         .greater_than(0).less_than(2).fallback(1.5);
     surface.vector("wind_shear", 2, "shear stress applied to the free surface (wind): each free-surface particle "
                                     "carries it on its share of the surface (dp on the initial lattice; measured "

@@ -15,7 +15,7 @@ constexpr std::uint64_t checkpoint_magic = 0x3146495346485053ULL;  // "SPHFSIF1"
 
 std::size_t Simulation2D::free_surface_count() const {
     const auto& P = st_.P;
-    const float threshold = static_cast<float>(s_.surface_threshold);
+    const float threshold = surface_threshold();
     std::size_t n = 0;
     for (std::size_t i = 0; i < P.size(); ++i) n += P.kind[i] == Kind::Fluid && P.div_r[i] < threshold;
     return n;

@@ -331,7 +331,7 @@ protocol::Fields SphSolver::snapshot() {
     auto pos = F64Array::zeros(n, 2), vel = F64Array::zeros(n, 2);
     auto rho = F64Array::zeros(n, 1), p = F64Array::zeros(n, 1);
     auto tag = I32Array::zeros(n, 1), kind = I32Array::zeros(n, 1), surface = I32Array::zeros(n, 1);
-    const float threshold = static_cast<float>(settings_.surface_threshold);
+    const float threshold = sim_->surface_threshold();
     for (std::size_t i = 0; i < n; ++i) {
         const auto k = static_cast<std::uint64_t>(P.id[i]);  // stable order: by original index
         pos(k, 0) = P.x[i][0];

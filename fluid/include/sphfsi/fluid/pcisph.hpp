@@ -3,7 +3,8 @@
 // pressures are found iteratively: predict velocities and positions with the current pressure force,
 // predict densities by summation at the predicted positions, and raise each particle's pressure by
 // delta * (rho* - rho0) with the precomputed stiffness
-//   delta = rho0^2 / (2 dt^2 m m_sum sum_j |grad W_ij|^2)  (filled prototype neighbourhood on the dp lattice),
+//   delta = rho0^2 / (2 dt^2 m m_sum (|sum_j grad W_ij|^2 + sum_j |grad W_ij|^2))  (Solenthaler & Pajarola's
+//   form, on a filled prototype neighbourhood of the dp lattice, where the first sum vanishes),
 // until the largest predicted density error is below eta * rho0 after at least `min_iterations` corrections.
 // The pressure force is a_i = -sum_j m (p_i + p_j) / rho0^2 grad W_ij at the positions of time t (the form
 // the stiffness delta is derived for). Neighbour lists are those of time t: predicted positions move a

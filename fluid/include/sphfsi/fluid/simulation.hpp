@@ -68,6 +68,10 @@ public:
     double max_speed() const { return st_.u_max; }
     std::uint64_t escaped_count() const { return st_.escaped; }
     std::size_t free_surface_count() const;
+    // The divergence of position below which a fluid particle is on the free surface. The scene states it in
+    // 2D terms (2 in the bulk, 2.0 - 2.83 in the top layers of a 3D lattice against 3): scaled by Dim / 2, so a
+    // 3D build does not silently flag nothing at the scene's 1.5 (a review).
+    float surface_threshold() const { return static_cast<float>(s_.surface_threshold * Dim / 2.0); }
     // Kinetic and gravitational potential energy of the fluid particles in the tank [J/m in 2D], the
     // potential measured from y = 0 (the tank floor) along gravity.
     struct Energy { double kinetic = 0.0, potential = 0.0; };

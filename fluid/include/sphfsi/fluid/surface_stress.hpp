@@ -30,7 +30,7 @@ namespace sphfsi::fluid {
 template <int Dim>
 struct SurfaceStress {
     Vec<Dim> tau{};                // stress [Pa]
-    float threshold = 1.5f;        // divergence of position below which a fluid particle is on the surface
+    float threshold = 0.75f * Dim; // divergence of position below which a fluid particle is on the surface
     double h = 0.0;                // smoothing length: the surface weight reaches 2h
     double lattice_share = 0.0;    // dp^(Dim-1) times the surface weight summed over the initial lattice
     bool on() const { return norm2(tau) > 0.0; }
