@@ -153,7 +153,9 @@ DamBreakResult run_dam_break(const Value& config, const char* name) {
         std::printf("dam break (%s): %s %.2f   %.3f   %.2f   %+.1f %%\n", name, probe.front ? "Z at T  " : "H at tau",
                     probe.ref.time, sim, probe.ref.value, 100 * err);
     }
-    // Dye: the two halves of the column keep their tags (0 left, 1 right), half the particles each.
+    // Dye: the two halves of the column are tagged 0 (left) and 1 (right), half the particles each, and none
+    // left the fluid (tags never change; an escaped particle would unbalance the count). That the tags reach
+    // the record is tests/integration's.
     const auto& P = solver->simulation().particles();
     std::size_t left = 0, right = 0;
     for (std::size_t i = 0; i < P.size(); ++i)

@@ -89,6 +89,24 @@ TEST_SUITE("pressure_correction") {
                 CHECK(std::abs(corrected[2 * u + w] - want) < 1e-12);
                 CHECK(std::abs(LM[2 * u + w] - (u == w ? 1.0 : 0.0)) < 1e-12);
             }
+
+        // Where the correction is off (L = I): a boundary particle; a fluid particle whose divergence of
+        // position says its support is not full (below 0.9 Dim); and one whose support is truncated though its
+        // divergence was not looked at, the patch's corner, where M is about a quarter of I (det M < 1/4).
+        const auto is_identity = [](const Mat<2>& m) { return m[0] == 1.0 && m[1] == 0.0 && m[2] == 0.0 && m[3] == 1.0; };
+        CHECK_FALSE(is_identity(L[c]));
+        std::size_t corner = 0, other = c == 0 ? 1 : 0;  // other: c's nearest neighbour, interior too
+        for (std::size_t q = 0; q < P.size(); ++q) {
+            if (norm2(P.x[q]) > norm2(P.x[corner])) corner = q;
+            if (q != c && norm2(P.x[q] - P.x[c]) < norm2(P.x[other] - P.x[c])) other = q;
+        }
+        CHECK_FALSE(is_identity(L[other]));
+        P.div_r[c] = 1.7f;
+        P.kind[other] = Kind::Wall;
+        correction_matrices(P, grid, kg, mass, L);
+        CHECK(is_identity(L[c]));
+        CHECK(is_identity(L[other]));
+        CHECK(is_identity(L[corner]));
     }
 
     TEST_CASE("wind-driven flow from a jittered lattice is within 5 % once corrected") {

@@ -47,7 +47,22 @@ def test_structure_alone_starts_only_the_structure():
 
 def test_fluid_alone_starts_only_the_fluid():
     assert roles_in(run_coarse("fluid_only")) == ["fluid"]
-    assert roles_in(run_coarse("dam_break")) == ["fluid"]
+    out = run_coarse("dam_break")
+    assert roles_in(out) == ["fluid"]
+    # The dye (issue 4, point 9): the column's halves carry tags 0 (left) and 1 (right) in every frame, so
+    # mixing can be seen. At the last frame the right half leads the surge along the floor.
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        kind, tag, pos = f["frames/fluid/kind"], f["frames/fluid/tag"], f["frames/fluid/position"]
+        for k in range(kind.shape[0]):
+            fluid = kind[k][:, 0] == 0
+            tags = tag[k][fluid, 0]
+            assert sorted(set(tags.tolist())) == [0, 1] and (tags == 0).sum() == (tags == 1).sum(), k
+            if k == 0:
+                x0 = pos[0][fluid, 0]
+                assert x0[tags == 0].max() < x0[tags == 1].min()  # split at the middle
+        x = pos[-1][kind[-1][:, 0] == 0, 0]
+        last = tag[-1][kind[-1][:, 0] == 0, 0]
+        assert x[last == 1].max() > x[last == 0].max()
     assert roles_in(run_coarse("wind_basin")) == ["fluid"]
 
 
