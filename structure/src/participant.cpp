@@ -101,12 +101,14 @@ AdvanceReply StructureSolver::advance(const AdvanceRequest& request, Progress& p
 
     AdvanceReply reply;
     int max_iterations = 0;
+    double max_residual = 0.0;  // Newton may stop on its round-off floor, up to sqrt(tolerance): recorded
     for (std::uint32_t k = 0; k < n; ++k) {
         // Moment arms of the vertex forces follow the cross-sections: taken at each sub-step's start.
         const Vector extra = force ? interface_->lump(*force, d.state().u, depth) : Vector();
         const StepReport r = d.step(h, extra);
         reply.solver_iterations += static_cast<std::uint32_t>(r.iterations);
         max_iterations = std::max(max_iterations, r.iterations);
+        max_residual = std::max(max_residual, r.residual);
         progress.tick();
     }
     d.state().t = request.t + request.dt;  // land exactly on the window end, no round-off drift
@@ -120,6 +122,7 @@ AdvanceReply StructureSolver::advance(const AdvanceRequest& request, Progress& p
     double umax = 0;
     for (int i = 0; i < d.model().node_count(); ++i) umax = std::max(umax, d.state().u.segment<2>(3 * i).norm());
     reply.stats = Value(Value::Table{{"newton_iterations_max", Value(max_iterations)},
+                                     {"newton_residual_max", Value(max_residual)},
                                      {"factorizations", Value(d.factorizations())},
                                      {"kinetic_energy", Value(e.kinetic)},
                                      {"strain_energy", Value(e.strain)},
