@@ -70,6 +70,29 @@ Vector corotational_internal_force(const Model& model, const Vector& u, SparseMa
     return f;
 }
 
+Vector corotational_deformation_damping(const Model& model, const Vector& u, const Vector& u0, double h, SparseMatrix* tangent) {
+    Vector f = Vector::Zero(model.dof_count());
+    std::vector<Eigen::Triplet<double>> t;
+    if (tangent) t.reserve(36 * model.elements.size());
+    Mat6 ke;
+    for (const Element& e : model.elements) {
+        const auto d = dofs(e);
+        Vec6 de, de0;
+        for (int i = 0; i < 6; ++i) de[i] = u[d[i]], de0[i] = u0[d[i]];
+        const Vec6 fe = corotational_deformation_damping(e, model.nodes[e.n1], model.nodes[e.n2], de, de0, h, tangent ? &ke : nullptr);
+        for (int i = 0; i < 6; ++i) {
+            f[d[i]] += fe[i];
+            if (tangent)
+                for (int j = 0; j < 6; ++j) t.emplace_back(d[i], d[j], ke(i, j));
+        }
+    }
+    if (tangent) {
+        tangent->resize(model.dof_count(), model.dof_count());
+        tangent->setFromTriplets(t.begin(), t.end());
+    }
+    return f;
+}
+
 std::vector<double> element_angles(const Model& model, const Vector& u) {
     std::vector<double> out;
     out.reserve(model.elements.size());

@@ -4,6 +4,36 @@
 #include <numbers>
 
 namespace sphfsi::structure {
+namespace {
+
+// The chord's frame at angle beta and length L: r = d(L)/d(p), z = L d(beta)/d(p), and Crisfield's B, the
+// rates of the local deformation (elongation, theta1, theta2) from the element's six global rates.
+struct ChordFrame {
+    Vec6 r, z;
+    Eigen::Matrix<double, 3, 6> B;
+};
+ChordFrame chord_frame(double beta, double L) {
+    const double c = std::cos(beta), sn = std::sin(beta);
+    ChordFrame f;
+    f.r << -c, -sn, 0, c, sn, 0;
+    f.z << sn, -c, 0, -sn, c, 0;
+    f.B.row(0) = f.r.transpose();
+    f.B.row(1) = -f.z.transpose() / L;
+    f.B.row(2) = -f.z.transpose() / L;
+    f.B(1, 2) += 1.0;
+    f.B(2, 5) += 1.0;
+    return f;
+}
+
+// k_l: the local stiffness of (elongation, theta1, theta2).
+Eigen::Matrix3d local_stiffness(const Element& e) {
+    const double k = e.EI / e.L0;
+    Eigen::Matrix3d kl;
+    kl << e.EA / e.L0, 0, 0, 0, 4 * k, 2 * k, 0, 2 * k, 4 * k;
+    return kl;
+}
+
+}  // namespace
 
 double wrap_angle(double a) {
     const double two_pi = 2.0 * std::numbers::pi;
@@ -97,26 +127,31 @@ CorotationalState corotational_element(const Element& e, const Vec2& x1, const V
     s.M2 = k * (2 * s.theta1 + 4 * s.theta2);
     s.strain_energy = 0.5 * s.N * s.elongation + 0.5 * (s.M1 * s.theta1 + s.M2 * s.theta2);
 
-    const double c = std::cos(s.beta), sn = std::sin(s.beta), L = s.length;
-    Vec6 r, z;
-    r << -c, -sn, 0, c, sn, 0;   // d(L) / d(p)
-    z << sn, -c, 0, -sn, c, 0;   // L d(beta) / d(p)
-    Eigen::Matrix<double, 3, 6> B;
-    B.row(0) = r.transpose();
-    B.row(1) = -z.transpose() / L;
-    B.row(2) = -z.transpose() / L;
-    B(1, 2) += 1.0;
-    B(2, 5) += 1.0;
+    const double L = s.length;
+    const ChordFrame f = chord_frame(s.beta, L);
+    const Vec6 &r = f.r, &z = f.z;
+    const auto& B = f.B;
     force = B.transpose() * Eigen::Vector3d(s.N, s.M1, s.M2);
     if (tangent || material) {
-        Eigen::Matrix3d kl;
-        kl << e.EA / L0, 0, 0, 0, 4 * k, 2 * k, 0, 2 * k, 4 * k;
-        const Mat6 km = B.transpose() * kl * B;
+        const Mat6 km = B.transpose() * local_stiffness(e) * B;
         if (material) *material = km;
         if (tangent)
             *tangent = km + (s.N / L) * z * z.transpose() + ((s.M1 + s.M2) / (L * L)) * (r * z.transpose() + z * r.transpose());
     }
     return s;
+}
+
+Vec6 corotational_deformation_damping(const Element& e, const Vec2& x1, const Vec2& x2, const Vec6& d, const Vec6& d0,
+                                      double h, Mat6* tangent) {
+    Vec6 unused;
+    const CorotationalState now = corotational_element(e, x1, x2, d, unused, nullptr);
+    const CorotationalState before = corotational_element(e, x1, x2, d0, unused, nullptr);
+    const Eigen::Vector3d rate((now.elongation - before.elongation) / h, wrap_angle(now.theta1 - before.theta1) / h,
+                               wrap_angle(now.theta2 - before.theta2) / h);
+    const ChordFrame f = chord_frame(now.beta, now.length);
+    const Eigen::Matrix3d kl = local_stiffness(e);
+    if (tangent) *tangent = f.B.transpose() * kl * f.B / h;
+    return f.B.transpose() * (kl * rate);
 }
 
 }  // namespace sphfsi::structure

@@ -93,6 +93,7 @@ void FrameDynamics::setup_damping() {
                                                 num(rayleigh_alpha_) + ", beta = " + num(rayleigh_beta_) +
                                                 "), i.e. negative damping in some modes");
         D_ = rayleigh_alpha_ * M_ + rayleigh_beta_ * K0_;
+        alpha_mass_ = rayleigh_alpha_ * M_;
     }
 }
 
@@ -198,17 +199,23 @@ StepReport FrameDynamics::step(double h, const Vector& extra) {
     // The part of the weighted balance that belongs to time n (zero for backward Euler / Newmark).
     Vector rest = Vector::Zero(un.size());
     if (am != 0.0) rest += am * (M_ * an);
-    if (af != 0.0) rest += af * (damping(un) * vn + internal_force(un) - fe0);
+    // Co-rotational stiffness-proportional damping acts on the elements' deformation over the step
+    // (corotational_deformation_damping), not on D v: its rate stands for the weighted time's, and rigid
+    // motion, however far it turns in a step, is not damped. The mass part alpha M v stays in D.
+    const SparseMatrix& D = turning_damping() ? alpha_mass_ : D_;
+    if (af != 0.0) rest += af * (D * vn + internal_force(un) - fe0);
 
     Vector u = un, v1, a1, fint;
-    SparseMatrix Kt, D1 = D_;  // D1: the damping matrix at u (it turns with co-rotational elements)
+    SparseMatrix Kt, Kd;  // Kd: the deformation damping's tangent
     auto residual = [&](double& scale, bool want_tangent) {
         const Vector du = u - un;
         a1 = c.c0 * du - c.c1 * vn - c.c2 * an;
         v1 = c.c3 * du + c.c4 * vn + c.c5 * an;
         fint = internal_force(u, want_tangent ? &Kt : nullptr);
-        if (turning_damping()) D1 = damping(u);
-        const Vector inertia = (1.0 - am) * (M_ * a1), damping = (1.0 - af) * (D1 * v1);
+        Vector damping = (1.0 - af) * (D * v1);
+        if (turning_damping())
+            damping += rayleigh_beta_ * corotational_deformation_damping(model_, u, un, h, want_tangent ? &Kd : nullptr);
+        const Vector inertia = (1.0 - am) * (M_ * a1);
         const Vector R = inertia + damping + (1.0 - af) * (fint - fe1) + rest;
         scale = std::max({reduce(inertia).norm(), reduce(damping).norm(), reduce(fint).norm(), reduce(fe1).norm(),
                           reduce(rest).norm()});
@@ -216,9 +223,8 @@ StepReport FrameDynamics::step(double h, const Vector& extra) {
     };
     auto effective = [&](const SparseMatrix& K) {
         SparseMatrix S = (1.0 - am) * c.c0 * M_ + (1.0 - af) * K;
-        // The damping force's change with the elements' turning, (dD/du) v, is left out of the tangent: with
-        // it Newton would converge quadratically, without it still converges (beta is small).
-        if (config_.damping.kind != DampingKind::None) S += (1.0 - af) * c.c3 * D1;
+        if (config_.damping.kind != DampingKind::None) S += (1.0 - af) * c.c3 * D;
+        if (turning_damping()) S += rayleigh_beta_ * Kd;
         return reduce(S);
     };
 
@@ -281,6 +287,44 @@ StepReport FrameDynamics::step(double h, const Vector& extra) {
     return report;
 }
 
+// Forces repeat every whole turn of a node, so Newton may land rotations whole turns off (a review saw
+// -70.7 rad for -pi/2). The two nodes of an element differ by its bending, far less than half a turn, so
+// the rotations are made continuous along the mesh from each part's nodes of fixed rotation (exact), or
+// else from one node kept within half a turn of where the increment started (an increment may turn the
+// whole structure further: the full circle in one increment turns its tip a whole turn).
+void FrameDynamics::unwrap_rotations(Vector& u, const Vector& start) const {
+    const int n = model_.node_count();
+    std::vector<std::vector<int>> next(static_cast<std::size_t>(n));
+    for (const Element& e : model_.elements) {
+        next[static_cast<std::size_t>(e.n1)].push_back(e.n2);
+        next[static_cast<std::size_t>(e.n2)].push_back(e.n1);
+    }
+    const Vector moves = model_.T.cwiseAbs() * Vector::Ones(model_.T.cols());  // 0 where a DOF is fixed
+    std::vector<char> done(static_cast<std::size_t>(n), 0);
+    std::vector<int> queue;
+    auto spread = [&] {
+        for (std::size_t q = 0; q < queue.size(); ++q)
+            for (int j : next[static_cast<std::size_t>(queue[q])])
+                if (!done[static_cast<std::size_t>(j)]) {
+                    const double from = u[3 * queue[q] + 2];
+                    u[3 * j + 2] = from + wrap_angle(u[3 * j + 2] - from);
+                    done[static_cast<std::size_t>(j)] = 1;
+                    queue.push_back(j);
+                }
+        queue.clear();
+    };
+    for (int i = 0; i < n; ++i)
+        if (moves[3 * i + 2] == 0.0) done[static_cast<std::size_t>(i)] = 1, queue.push_back(i);
+    spread();
+    for (int i = 0; i < n; ++i)
+        if (!done[static_cast<std::size_t>(i)]) {
+            u[3 * i + 2] = start[3 * i + 2] + wrap_angle(u[3 * i + 2] - start[3 * i + 2]);
+            done[static_cast<std::size_t>(i)] = 1;
+            queue.push_back(i);
+            spread();
+        }
+}
+
 int FrameDynamics::solve_static(const std::function<Vector(const Vector&)>& load, int increments) {
     ReducedSolver solver;
     const double tol = config_.newton.tolerance;
@@ -330,12 +374,7 @@ int FrameDynamics::solve_static(const std::function<Vector(const Vector&)>& load
             ++total;
         }
         if (converged) {
-            // Forces repeat every whole turn of a node, so Newton may land a rotation whole turns from where
-            // the increment started (a review saw -70.7 rad for -pi/2): keep each within half a turn of it.
-            for (int i = 0; i < model_.node_count(); ++i) {
-                const double start = state_.u[3 * i + 2];
-                u[3 * i + 2] = start + wrap_angle(u[3 * i + 2] - start);
-            }
+            unwrap_rotations(u, state_.u);
             state_.u = u;
             lambda = target;
         } else if (++halvings <= 10) {

@@ -14,6 +14,10 @@ SparseMatrix assemble_mass(const Model& model, MassKind kind);
 Vector corotational_internal_force(const Model& model, const Vector& u, SparseMatrix* tangent, double* strain_energy,
                                    SparseMatrix* material = nullptr);
 
+// The elements' stiffness-proportional damping over a step from u0 to u of length h, summed
+// (corotational_deformation_damping: zero for rigid motion); its main tangent part when asked for.
+Vector corotational_deformation_damping(const Model& model, const Vector& u, const Vector& u0, double h, SparseMatrix* tangent);
+
 // Current chord angle of every element (reference angle when `u` is empty).
 std::vector<double> element_angles(const Model& model, const Vector& u);
 

@@ -85,10 +85,12 @@ private:
     void check_bounded(const Vector& u, double t) const;
     static bool round_off_floor(int iteration, double norm, double previous, double scale, double tol);
     void setup_damping();
+    void unwrap_rotations(Vector& u, const Vector& start) const;
 
     StructureConfig config_;
     Model model_;
     SparseMatrix M_, K0_, D_;  // D_: the damping matrix unless it turns with the elements (damping(u))
+    SparseMatrix alpha_mass_;  // Rayleigh's alpha M: co-rotational steps damp the beta part by deformation
     SceneLoads loads_;
     Modes modes_;
     double rayleigh_alpha_ = 0, rayleigh_beta_ = 0;
