@@ -176,7 +176,9 @@ void check_combinations(const Value& fluid, const std::string& path, Errors& err
         errors.add(&tank, "key '" + key(path, "tank.closed_top") + "': a tank periodic in y has no bottom or top wall");
     // WCSPH's equation of state needs c0; so does artificial viscosity (alpha c0) with PCISPH, which would
     // otherwise run with none, silently (a review).
-    const bool needs_c0 = model == "wcsph" || (model == "pcisph" && fluid.at("viscosity").at("model").as_string() == "artificial");
+    const Value& viscosity = fluid.at("viscosity");
+    const bool needs_c0 = model == "wcsph" || (model == "pcisph" && viscosity.at("model").as_string() == "artificial" &&
+                                               viscosity.at("alpha").as_double() > 0.0);
     if (needs_c0 && pressure.at("c0").as_double() == 0.0 && pressure.at("u_max").as_double() == 0.0) {
         const auto g = fluid.at("gravity").as_doubles();
         const Value* water = fluid.find("water");

@@ -308,7 +308,11 @@ double Simulation2D::stable_dt() {
     if (s_.pressure == PressureModel::Standard) c = standard_.sound_speed(st_.rho_max);
     double a = st_.a_max;
     if (s_.pressure == PressureModel::Pcisph) a = std::max(a, st_.a_max_last);
-    const double nu = (s_.viscosity == ViscosityModel::Morris || s_.viscosity == ViscosityModel::Mueller) ? s_.nu : 0.0;
+    // Mueller's Laplacian is scaled on the lattice (laplacian_scale, up to 1.16 at h = dp): the effective
+    // viscosity the step must resolve is nu times that.
+    const double nu = s_.viscosity == ViscosityModel::Morris   ? s_.nu
+                      : s_.viscosity == ViscosityModel::Mueller ? s_.nu * rates_.visc.laplacian_scale
+                                                                : 0.0;
     StableStep ss = stable_step(limits_, h_, c, st_.u_max, a, nu);
     // PCISPH has no sound speed in its CFL condition, so at cfl near 1 a particle would move about h per
     // step, beyond the reach of the neighbour lists its prediction uses (step_pcisph). The step aims at
