@@ -305,8 +305,8 @@ TableSchema build() {
     auto& damp = s.table("damping", "Viscous damping matrix D in M a + D v + f_int(u) = f_ext.");
     damp.choice("model", {"none", "simple", "rayleigh"},
                 "none: D = 0; simple: D = c M (the thesis's matrix, damping ratio c / (2 omega) in every mode); "
-                "rayleigh: D = alpha M + beta K0 from target ratios at two frequencies (corotational: K of each element "
-                "in its current orientation, so rigid rotations are not damped)")
+                "rayleigh: D = alpha M + beta K0 from target ratios at two frequencies (corotational: beta damps each "
+                "element's local deformation, so rigid rotations are not damped)")
         .fallback("none");
     damp.number("c", "coefficient of the simple model D = c M").unit("1/s").at_least(0).fallback(0.0);
     damp.vector("ratios", 2, "rayleigh: target damping ratios zeta1, zeta2 at the two frequencies").at_least(0)
