@@ -1,5 +1,5 @@
 #!/usr/bin/env -S /usr/bin/python3
-"""sphfsi's benchmark command (the `sphfsi bench` of the performance issue): fixed, deterministic
+"""sphfsi's benchmark command (the benchmark command the performance issue asks for): fixed, deterministic
 workloads, each run as its own process, repeated, medians printed.
 
 usage: /usr/bin/python3 tools/bench.py [--bin build/bin] [--repeats 5] [--quick]

@@ -1,5 +1,6 @@
 #!/usr/bin/env -S /usr/bin/python3
-"""Runs a scene over a grid of overrides and tabulates cost and error per run: `sphfsi sweep`.
+"""Runs a scene over a grid of overrides and tabulates cost and error per run (sphfsi itself only runs and
+checks single scenes).
 
 usage: /usr/bin/python3 tools/sweep.py SWEEP.toml [--jobs N] [--out DIR] [--only PATTERN] [--resume]
                                        [--check] [--print-expect] [--list] [--bin BUILD/bin] [--no-charts]
