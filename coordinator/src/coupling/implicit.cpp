@@ -36,7 +36,8 @@ public:
     virtual ~Accelerator() = default;
     virtual void begin_window() = 0;
     virtual Vec next(const Vec& x, const Vec& x_tilde, Eigen::Index np) = 0;
-    virtual void end_window() {}
+    // `converged`: whether the window met its tolerance (a capped window's secant pairs are not kept).
+    virtual void end_window(bool /*converged*/) {}
 };
 
 class ConstantRelaxation : public Accelerator {
@@ -138,9 +139,11 @@ public:
     }
     // The last iteration's pair is not added (preCICE adds it): measured, it cost iterations or changed
     // nothing in every scene we tried (docs/coupling.md). A window that converged in two iterations or fewer
-    // stores nothing.
-    void end_window() override {
-        if (reuse_ == 0 || V_.empty()) return;
+    // stores nothing, and neither does one stopped at max_iterations without converging: its pairs (a
+    // clamp, a shock in the fluid) would steer the next iqn_reuse windows, and the filter only removes
+    // dependent columns, not wrong ones (a review).
+    void end_window(bool converged) override {
+        if (reuse_ == 0 || V_.empty() || !converged) return;
         past_.emplace_front(V_, W_);
         while (static_cast<int>(past_.size()) > reuse_) past_.pop_back();
     }
@@ -217,7 +220,7 @@ public:
             }
             x = acc_->next(x, xt, nd);
         }
-        acc_->end_window();
+        acc_->end_window(o.converged);
         o.fluid.reply.substeps = fluid_substeps;
         o.structure.reply.substeps = structure_substeps;
         o.fluid.reply.solver_iterations = fluid_iters;
