@@ -110,7 +110,8 @@ Checkpoint read_checkpoint(const std::filesystem::path& file) {
             c.interface.created_total = coupling.ptr[4].as<double>();
             c.interface.fluid_energy = coupling.ptr[5].as<double>();
         }
-        if (coupling.size > 6) c.interface.total_energy = coupling.ptr[6].as<double>();  // else from the next window
+        // Else from the next window. Builds before 2026-11-27 wrote 0 for "not known yet".
+        if (coupling.size > 6 && coupling.ptr[6].as<double>() != 0.0) c.interface.total_energy = coupling.ptr[6].as<double>();
         const auto& m = a.ptr[13].via.map;
         for (std::uint32_t k = 0; k < m.size; ++k) {
             const auto& bin = m.ptr[k].val.via.bin;

@@ -1,5 +1,6 @@
 #include "sphfsi/coordinator/energy_guard.hpp"
 
+#include <cmath>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -44,7 +45,7 @@ void account_energy(const EnergyLimits& limits, std::uint64_t window, double t, 
     if (const Value* w = o.structure.reply.stats.is_table() ? o.structure.reply.stats.find("external_work") : nullptr;
         w && w->is_number())
         load_work = w->as_double() - s.work_total;
-    if (!(s.total_energy > 0.0) && fluid && structure) s.total_energy = *fluid + *structure - load_work;
+    if (std::isnan(s.total_energy) && fluid && structure) s.total_energy = *fluid + *structure - load_work;
 
     const double created_limit = limits.max_created * s.fluid_energy;
     if (created_limit > 0.0 && s.created_total > created_limit) {
@@ -60,7 +61,7 @@ void account_energy(const EnergyLimits& limits, std::uint64_t window, double t, 
     }
 
     const double gain_limit = limits.max_gain * s.fluid_energy;
-    if (limits.external_work || !(gain_limit > 0.0) || !(s.total_energy > 0.0) || !fluid || !structure) return;
+    if (limits.external_work || !(gain_limit > 0.0) || std::isnan(s.total_energy) || !fluid || !structure) return;
     const double gain = *fluid + *structure - load_work - s.total_energy;
     if (gain > gain_limit) {
         std::ostringstream m;

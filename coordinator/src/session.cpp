@@ -1,5 +1,6 @@
 #include "sphfsi/coordinator/session.hpp"
 
+#include <limits>
 #include <cmath>
 
 #include "sphfsi/coordinator/recorder.hpp"
@@ -63,7 +64,8 @@ void InterfaceState::reset(const InterfaceMesh& m) {
     const auto n = m.vertices.rows();
     displacement = velocity = previous_displacement = force = fluid_displacement = F64Array::zeros(n, 2);
     previous_dt = 0.0;
-    work_total = created_total = fluid_energy = total_energy = 0.0;
+    work_total = created_total = fluid_energy = 0.0;
+    total_energy = std::numeric_limits<double>::quiet_NaN();
 }
 
 const F64Array& vertex_field(const std::string& role, const Fields& fields, const std::string& name, std::size_t vertices) {

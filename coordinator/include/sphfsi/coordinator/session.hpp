@@ -1,6 +1,7 @@
 #pragma once
 // The participants as the coupling schemes see them: ADVANCE / SAVE / RESTORE with timing, and the
 // interface state passed between them.
+#include <limits>
 #include <string>
 
 #include "sphfsi/coordinator/hub.hpp"
@@ -46,9 +47,12 @@ struct InterfaceState {
     // given): the other side of the interface energy balance (docs/coupling.md).
     protocol::F64Array fluid_displacement;
     // The balance since t0: work done on the structure and energy created at the interface [J/m], the
-    // yardstick for the energy checks: the fluid's mechanical energy after the first window, and the fluid's
-    // plus the structure's after the first window (0: not known yet). energy_guard.hpp uses them.
-    double work_total = 0.0, created_total = 0.0, fluid_energy = 0.0, total_energy = 0.0;
+    // yardstick for the energy checks: the fluid's mechanical energy after the first window (0: not known
+    // yet), and the fluid's plus the structure's less the structure's own load work after the first window
+    // (NaN: not known yet; it may be 0 or negative, which must not read as unknown: the gain check would
+    // then re-take its baseline every window and never run, a review). energy_guard.hpp uses them.
+    double work_total = 0.0, created_total = 0.0, fluid_energy = 0.0;
+    double total_energy = std::numeric_limits<double>::quiet_NaN();
     double previous_dt = 0.0;
 
     void reset(const protocol::InterfaceMesh& m);
