@@ -90,8 +90,7 @@ void SolidSection::place(double t) {
     for (const auto& f : faces_) placed_faces_.push_back({at_[static_cast<std::size_t>(f[0])], at_[static_cast<std::size_t>(f[1])]});
     // Bins a quarter of the farthest a face can matter (2 L + dp) wide, wider where the section is so large
     // that those would number more than 2^20 (counted in doubles: a vertex flung 1e8 m away must not overflow).
-    const double reach = 2.0 * layers_ + dp_;
-    bin_ = 0.25 * reach;
+    bin_ = 0.25 * reach();
     double nx = 1.0, ny = 1.0;
     for (;;) {
         nx = std::floor((hi_[0] - lo_[0]) / bin_) + 1.0;
@@ -101,7 +100,7 @@ void SolidSection::place(double t) {
     }
     if (!std::isfinite(nx * ny)) nx = ny = 1.0, bin_ = std::numeric_limits<double>::infinity();
     nx_ = static_cast<int>(nx), ny_ = static_cast<int>(ny);
-    reach_ = std::max(1, static_cast<int>(std::ceil(reach / bin_)));
+    reach_ = std::max(1, static_cast<int>(std::ceil(reach() / bin_)));
     fill(cell_bins_, cells_.size(), [&](std::size_t i, Vec2& lo, Vec2& hi) {
         lo = hi = at_[static_cast<std::size_t>(cells_[i][0])];
         for (std::int32_t v : cells_[i])
@@ -151,7 +150,6 @@ bool SolidSection::surface_at(const Vec2& foot, const Vec2& inward) const {
 // is measured on along the line from the foot through x to where the union ends.
 bool SolidSection::at_a_face(const Vec2& x, const Vec2& foot, double depth, const std::vector<std::uint32_t>& near) const {
     const Vec2 n = (x - foot) * (1.0 / depth);
-    const double reach = 2.0 * layers_ + dp_;  // beyond this thickness the allowance is L whatever it is
     thread_local std::vector<double> hits;
     hits.clear();
     for (std::uint32_t i : near) {
@@ -160,7 +158,7 @@ bool SolidSection::at_a_face(const Vec2& x, const Vec2& foot, double depth, cons
         const double denom = cross(n, e);
         if (denom == 0.0) continue;  // along the line: it meets the line's ends' faces instead
         const double s = cross(r, e) / denom, w = cross(r, n) / denom;
-        if (s > 0.0 && s < reach && w >= 0.0 && w <= 1.0) hits.push_back(s);
+        if (s > 0.0 && s < reach() && w >= 0.0 && w <= 1.0) hits.push_back(s);  // beyond, the allowance is L
     }
     std::sort(hits.begin(), hits.end());
     double beyond = std::numeric_limits<double>::infinity();
@@ -190,33 +188,27 @@ const std::vector<std::uint32_t>& SolidSection::faces_near(const Vec2& x, int bi
     return near;
 }
 
-bool SolidSection::past_surface(const Vec2& x, double tol) const {
-    if (!inside(x)) return false;
-    for (std::uint32_t i : faces_near(x, 1)) {  // bins are wider than tol (0.1 dp)
-        const Face& f = placed_faces_[i];
-        double u = 0.0;
-        const Vec2 foot = foot_on(f.a, f.b, x, u);
-        const double depth = norm(x - foot);
-        if (depth == 0.0) return false;  // on the face
-        if (depth <= tol && surface_at(foot, (x - foot) * (1.0 / depth))) return false;
-    }
-    return true;
-}
-
-bool SolidSection::lost(const Vec2& x) const {
-    if (!inside(x)) return false;
-    constexpr double over = 1e-9;  // a centre over a shared corner lies over both faces
-    // A centre no deeper than dp/2 below a surface point is at a face whatever the thickness (the allowance
-    // is at least dp/2). That settles the common case, a centre just past a face, from the faces of the 3 x 3
-    // bins around it (bins are wider than dp/2) with one probe.
+// Whether a surface point lies within `tol` of x (on a face counts), from the faces of the 3 x 3 bins around
+// it: bins are at least a quarter of 2 L + dp wide, more than the dp/2 and 0.1 dp asked for.
+bool SolidSection::surface_within(const Vec2& x, double tol) const {
     for (std::uint32_t i : faces_near(x, 1)) {
         const Face& f = placed_faces_[i];
         double u = 0.0;
         const Vec2 foot = foot_on(f.a, f.b, x, u);
         const double depth = norm(x - foot);
-        if (depth == 0.0) return false;  // on the face
-        if (depth <= 0.5 * dp_ && surface_at(foot, (x - foot) * (1.0 / depth))) return false;
+        if (depth == 0.0) return true;
+        if (depth <= tol && surface_at(foot, (x - foot) * (1.0 / depth))) return true;
     }
+    return false;
+}
+
+bool SolidSection::past_surface(const Vec2& x, double tol) const { return inside(x) && !surface_within(x, tol); }
+
+bool SolidSection::lost(const Vec2& x) const {
+    // A centre no deeper than dp/2 below a surface point is at a face whatever the thickness (the allowance
+    // is at least dp/2). That settles the common case, a centre just past a face, with one probe.
+    if (!inside(x) || surface_within(x, 0.5 * dp_)) return false;
+    constexpr double over = 1e-9;  // a centre over a shared corner lies over both faces
     // Deeper: the face points within L, nearest first, each measured across the section.
     const std::vector<std::uint32_t>& near = faces_near(x, reach_);
     struct Candidate {

@@ -72,6 +72,8 @@ private:
     };
     bool inside(const Vec2& x) const;
     bool surface_at(const Vec2& foot, const Vec2& inward) const;  // the union ends at foot, water can touch it
+    bool surface_within(const Vec2& x, double tol) const;
+    double reach() const { return 2.0 * layers_ + dp_; }  // the farthest a face can matter: 2 L + dp
     const std::vector<std::uint32_t>& faces_near(const Vec2& x, int bins) const;
     bool at_a_face(const Vec2& x, const Vec2& foot, double depth, const std::vector<std::uint32_t>& near) const;
     std::array<int, 2> bin_of(const Vec2& x) const;
