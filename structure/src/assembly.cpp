@@ -9,6 +9,14 @@ std::array<int, 6> dofs(const Element& e) {
     return {3 * e.n1, 3 * e.n1 + 1, 3 * e.n1 + 2, 3 * e.n2, 3 * e.n2 + 1, 3 * e.n2 + 2};
 }
 
+// The element's six displacements out of the global vector u.
+Vec6 element_dofs(const Element& e, const Vector& u) {
+    const auto d = dofs(e);
+    Vec6 de;
+    for (int i = 0; i < 6; ++i) de[i] = u[d[i]];
+    return de;
+}
+
 template <class ElementMatrix>
 SparseMatrix assemble(const Model& model, ElementMatrix&& element_matrix) {
     std::vector<Eigen::Triplet<double>> t;
@@ -46,9 +54,7 @@ Vector corotational_internal_force(const Model& model, const Vector& u, SparseMa
     Mat6 ke, kme;
     for (const Element& e : model.elements) {
         const auto d = dofs(e);
-        Vec6 de;
-        for (int i = 0; i < 6; ++i) de[i] = u[d[i]];
-        const auto s = corotational_element(e, model.nodes[e.n1], model.nodes[e.n2], de, fe, tangent ? &ke : nullptr,
+        const auto s = corotational_element(e, model.nodes[e.n1], model.nodes[e.n2], element_dofs(e, u), fe, tangent ? &ke : nullptr,
                                             material ? &kme : nullptr);
         energy += s.strain_energy;
         for (int i = 0; i < 6; ++i) f[d[i]] += fe[i];
@@ -70,16 +76,25 @@ Vector corotational_internal_force(const Model& model, const Vector& u, SparseMa
     return f;
 }
 
-Vector corotational_deformation_damping(const Model& model, const Vector& u, const Vector& u0, double h, SparseMatrix* tangent) {
+std::vector<Eigen::Vector3d> corotational_deformations(const Model& model, const Vector& u) {
+    std::vector<Eigen::Vector3d> out;
+    out.reserve(model.elements.size());
+    for (const Element& e : model.elements)
+        out.push_back(corotational_deformation(e, model.nodes[e.n1], model.nodes[e.n2], element_dofs(e, u)));
+    return out;
+}
+
+Vector corotational_deformation_damping(const Model& model, const Vector& u, const std::vector<Eigen::Vector3d>& at_start,
+                                        double h, SparseMatrix* tangent) {
     Vector f = Vector::Zero(model.dof_count());
     std::vector<Eigen::Triplet<double>> t;
     if (tangent) t.reserve(36 * model.elements.size());
     Mat6 ke;
-    for (const Element& e : model.elements) {
+    for (std::size_t k = 0; k < model.elements.size(); ++k) {
+        const Element& e = model.elements[k];
         const auto d = dofs(e);
-        Vec6 de, de0;
-        for (int i = 0; i < 6; ++i) de[i] = u[d[i]], de0[i] = u0[d[i]];
-        const Vec6 fe = corotational_deformation_damping(e, model.nodes[e.n1], model.nodes[e.n2], de, de0, h, tangent ? &ke : nullptr);
+        const Vec6 fe = corotational_deformation_damping(e, model.nodes[e.n1], model.nodes[e.n2], element_dofs(e, u),
+                                                         at_start[k], h, tangent ? &ke : nullptr);
         for (int i = 0; i < 6; ++i) {
             f[d[i]] += fe[i];
             if (tangent)

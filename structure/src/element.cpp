@@ -141,13 +141,18 @@ CorotationalState corotational_element(const Element& e, const Vec2& x1, const V
     return s;
 }
 
-Vec6 corotational_deformation_damping(const Element& e, const Vec2& x1, const Vec2& x2, const Vec6& d, const Vec6& d0,
-                                      double h, Mat6* tangent) {
+Eigen::Vector3d corotational_deformation(const Element& e, const Vec2& x1, const Vec2& x2, const Vec6& d) {
+    Vec6 unused;
+    const CorotationalState s = corotational_element(e, x1, x2, d, unused, nullptr);
+    return {s.elongation, s.theta1, s.theta2};
+}
+
+Vec6 corotational_deformation_damping(const Element& e, const Vec2& x1, const Vec2& x2, const Vec6& d,
+                                      const Eigen::Vector3d& e0, double h, Mat6* tangent) {
     Vec6 unused;
     const CorotationalState now = corotational_element(e, x1, x2, d, unused, nullptr);
-    const CorotationalState before = corotational_element(e, x1, x2, d0, unused, nullptr);
-    const Eigen::Vector3d rate((now.elongation - before.elongation) / h, wrap_angle(now.theta1 - before.theta1) / h,
-                               wrap_angle(now.theta2 - before.theta2) / h);
+    const Eigen::Vector3d rate((now.elongation - e0[0]) / h, wrap_angle(now.theta1 - e0[1]) / h,
+                               wrap_angle(now.theta2 - e0[2]) / h);
     const ChordFrame f = chord_frame(now.beta, now.length);
     const Eigen::Matrix3d kl = local_stiffness(e);
     if (tangent) *tangent = f.B.transpose() * kl * f.B / h;

@@ -207,6 +207,9 @@ StepReport FrameDynamics::step(double h, const Vector& extra) {
 
     Vector u = un, v1, a1, fint;
     SparseMatrix Kt, Kd;  // Kd: the deformation damping's tangent
+    // The elements' deformation at the step's start, once: every Newton iterate measures from it.
+    const std::vector<Eigen::Vector3d> deformed = turning_damping() ? corotational_deformations(model_, un)
+                                                                    : std::vector<Eigen::Vector3d>{};
     auto residual = [&](double& scale, bool want_tangent) {
         const Vector du = u - un;
         a1 = c.c0 * du - c.c1 * vn - c.c2 * an;
@@ -214,7 +217,7 @@ StepReport FrameDynamics::step(double h, const Vector& extra) {
         fint = internal_force(u, want_tangent ? &Kt : nullptr);
         Vector damping = (1.0 - af) * (D * v1);
         if (turning_damping())
-            damping += rayleigh_beta_ * corotational_deformation_damping(model_, u, un, h, want_tangent ? &Kd : nullptr);
+            damping += rayleigh_beta_ * corotational_deformation_damping(model_, u, deformed, h, want_tangent ? &Kd : nullptr);
         const Vector inertia = (1.0 - am) * (M_ * a1);
         const Vector R = inertia + damping + (1.0 - af) * (fint - fe1) + rest;
         scale = std::max({reduce(inertia).norm(), reduce(damping).norm(), reduce(fint).norm(), reduce(fe1).norm(),

@@ -14,9 +14,14 @@ SparseMatrix assemble_mass(const Model& model, MassKind kind);
 Vector corotational_internal_force(const Model& model, const Vector& u, SparseMatrix* tangent, double* strain_energy,
                                    SparseMatrix* material = nullptr);
 
-// The elements' stiffness-proportional damping over a step from u0 to u of length h, summed
-// (corotational_deformation_damping: zero for rigid motion); its main tangent part when asked for.
-Vector corotational_deformation_damping(const Model& model, const Vector& u, const Vector& u0, double h, SparseMatrix* tangent);
+// Every element's local deformation at u (corotational_deformation), in element order.
+std::vector<Eigen::Vector3d> corotational_deformations(const Model& model, const Vector& u);
+
+// The elements' stiffness-proportional damping over a step of length h from the deformations `at_start`
+// (corotational_deformations at the step's start) to u, summed (corotational_deformation_damping: zero
+// for rigid motion); its main tangent part when asked for.
+Vector corotational_deformation_damping(const Model& model, const Vector& u, const std::vector<Eigen::Vector3d>& at_start,
+                                        double h, SparseMatrix* tangent);
 
 // Current chord angle of every element (reference angle when `u` is empty).
 std::vector<double> element_angles(const Model& model, const Vector& u);

@@ -46,14 +46,17 @@ struct CorotationalState {
 CorotationalState corotational_element(const Element& e, const Vec2& x1, const Vec2& x2, const Vec6& d, Vec6& force,
                                        Mat6* tangent, Mat6* material = nullptr);
 
-// Stiffness-proportional damping of a co-rotational element over a step from displacements d0 to d:
-// B(d)^T k_l (e(d) - e(d0)) / h, e = (elongation, theta1, theta2) its local deformation. The rate of the
+// The local deformation e = (elongation, theta1, theta2) of a co-rotational element at displacements d.
+Eigen::Vector3d corotational_deformation(const Element& e, const Vec2& x1, const Vec2& x2, const Vec6& d);
+
+// Stiffness-proportional damping of a co-rotational element over a step from deformation e0 (at the step's
+// start, corotational_deformation) to displacements d: B(d)^T k_l (e(d) - e0) / h. The rate of the
 // deformation itself, not B v: e is unchanged by any rigid motion of the element, so a turning element is not
 // damped whatever the step, while the integrators' velocity at a step's end is the chord of a finite
 // rotation and B v would stretch it (a spinning beam failed Newton from 50 rad/s; a review). `tangent`: the
-// main part B^T k_l B / h (the change of B is left out: it multiplies the small e(d) - e(d0)).
-Vec6 corotational_deformation_damping(const Element& e, const Vec2& x1, const Vec2& x2, const Vec6& d, const Vec6& d0,
-                                      double h, Mat6* tangent);
+// main part B^T k_l B / h (the change of B is left out: it multiplies the small e(d) - e0).
+Vec6 corotational_deformation_damping(const Element& e, const Vec2& x1, const Vec2& x2, const Vec6& d,
+                                      const Eigen::Vector3d& e0, double h, Mat6* tangent);
 
 // Wraps an angle to (-pi, pi].
 double wrap_angle(double a);
