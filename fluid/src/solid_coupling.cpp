@@ -99,36 +99,42 @@ void InterfaceCoupling::end_window() {
     state_.dt = 0.0;
 }
 
-void InterfaceCoupling::vertex_positions(double t, std::vector<Vec2>& out) const {
-    const double s = state_.dt > 0.0 ? std::clamp((t - state_.t0) / state_.dt, 0.0, 1.0) : 0.0;
-    const bool end = state_.dt > 0.0 && t >= state_.t0 + state_.dt;  // as kinematics() takes the window's end
-    out.resize(reference_.size());
-    for (std::size_t i = 0; i < reference_.size(); ++i)
-        out[i] = reference_[i] + (end ? state_.u1[i] : state_.u0[i] + (state_.u1[i] - state_.u0[i]) * s);
-}
-
-void InterfaceCoupling::kinematics(std::size_t k, double t, Vec2& x, Vec2& v, Vec2& a) const {
-    const auto& w = weights_[k];
+InterfaceCoupling::WindowPoint InterfaceCoupling::window_point(double t) const {
     // Fraction of the window elapsed; outside a window (dt = 0) the structure sits at its start values.
-    const double s = state_.dt > 0.0 ? std::clamp((t - state_.t0) / state_.dt, 0.0, 1.0) : 0.0;
-    const double inv_dt = state_.dt > 0.0 ? 1.0 / state_.dt : 0.0;
     // The window's end is the time the fluid advances to, t0 + dt, compared as such: (t - t0)/dt rounds to
     // just under 1 there about every other window, and the solids then ended a hair short of u1, which the
     // next window's start (u0 = u1) did not match, so the fluid re-evaluated everything (a full evaluation
     // in half of all windows, 20 % of a thesis-window run's fluid time at dp = 2 mm).
-    const bool end = state_.dt > 0.0 && t >= state_.t0 + state_.dt;
+    return {state_.dt > 0.0 ? std::clamp((t - state_.t0) / state_.dt, 0.0, 1.0) : 0.0,
+            state_.dt > 0.0 && t >= state_.t0 + state_.dt};
+}
+
+// At the window's end the end values themselves (u0 + (u1 - u0) need not round to u1): a window's end and the
+// next window's start then put the solid particles at bitwise the same place, which lets the fluid keep the
+// rates of its end-of-window evaluation and only redo the part that depends on the new window's
+// acceleration (Simulation2D::refresh_solid_rates).
+Vec2 InterfaceCoupling::vertex_displacement(std::size_t i, WindowPoint p) const {
+    return p.end ? state_.u1[i] : state_.u0[i] + (state_.u1[i] - state_.u0[i]) * p.s;
+}
+
+void InterfaceCoupling::vertex_positions(double t, std::vector<Vec2>& out) const {
+    const WindowPoint p = window_point(t);
+    out.resize(reference_.size());
+    for (std::size_t i = 0; i < reference_.size(); ++i) out[i] = reference_[i] + vertex_displacement(i, p);
+}
+
+void InterfaceCoupling::kinematics(std::size_t k, double t, Vec2& x, Vec2& v, Vec2& a) const {
+    const auto& w = weights_[k];
+    const WindowPoint p = window_point(t);
+    const double s = p.s;
+    const double inv_dt = state_.dt > 0.0 ? 1.0 / state_.dt : 0.0;
     x = particles_ref_[k];
     v = Vec2{};
     a = Vec2{};
     for (int q = 0; q < 4; ++q) {
         const std::size_t i = static_cast<std::size_t>(w.vertex[q]);
-        // At the window's end the end values themselves (u0 + (u1 - u0) need not round to u1): a window's end and the
-        // next window's start then put the solid particles at bitwise the same place, which lets the fluid
-        // keep the rates of its end-of-window evaluation and only redo the part that depends on the new
-        // window's acceleration (Simulation2D::refresh_solid_rates).
-        const Vec2 u = end ? state_.u1[i] : state_.u0[i] + (state_.u1[i] - state_.u0[i]) * s;
-        const Vec2 vel = end ? state_.v1[i] : state_.v0[i] + (state_.v1[i] - state_.v0[i]) * s;
-        x += u * w.weight[q];
+        const Vec2 vel = p.end ? state_.v1[i] : state_.v0[i] + (state_.v1[i] - state_.v0[i]) * s;  // as the displacement
+        x += vertex_displacement(i, p) * w.weight[q];
         v += vel * w.weight[q];
         a += (state_.v1[i] - state_.v0[i]) * (inv_dt * w.weight[q]);
     }

@@ -59,6 +59,14 @@ public:
     void set_state(const State& s) { state_ = s; }
 
 private:
+    // Where time t falls in the current window: the fraction elapsed, and whether it is the window's end.
+    struct WindowPoint {
+        double s;
+        bool end;
+    };
+    WindowPoint window_point(double t) const;
+    Vec2 vertex_displacement(std::size_t i, WindowPoint p) const;  // vertex i's, at that point
+
     std::vector<Vec2> reference_;       // vertex reference positions
     std::vector<Vec2> particles_ref_;   // particle reference positions
     std::vector<SolidParticleWeights> weights_;
