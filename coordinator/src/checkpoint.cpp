@@ -1,8 +1,12 @@
 #include "sphfsi/coordinator/checkpoint.hpp"
 
+#include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <msgpack.hpp>
 #include <sstream>
+#include <stdexcept>
+#include <utility>
 
 #include "sphfsi/coordinator/replace_file.hpp"
 #include "sphfsi/protocol/msgpack_writer.hpp"
@@ -19,13 +23,57 @@ void pack_array(Packer& pk, const F64Array& a) {
     pk.bin(a.values.data(), a.values.size() * sizeof(double));
 }
 
-F64Array unpack_array(const msgpack::object& o) {
-    F64Array a;
-    o.via.array.ptr[0].convert(a.shape);
-    const auto& bin = o.via.array.ptr[1].via.bin;
-    a.values.resize(bin.size / sizeof(double));
-    std::memcpy(a.values.data(), bin.ptr, a.values.size() * sizeof(double));
-    return a;
+// Every entry is checked for its type and size before it is read: a damaged or foreign file is refused
+// with what was wrong, never read past its end (a one-byte file had crashed the coordinator).
+const msgpack::object_array& array_of(const msgpack::object& o, std::uint32_t min, std::uint32_t max, const char* what) {
+    if (o.type != msgpack::type::ARRAY || o.via.array.size < min || o.via.array.size > max)
+        throw std::runtime_error(std::string(what) + " is not an array of " + std::to_string(min) +
+                                 (max > min ? " to " + std::to_string(max) : std::string()) + " entries");
+    return o.via.array;
+}
+
+const msgpack::object_bin& bin_of(const msgpack::object& o, const char* what) {
+    if (o.type != msgpack::type::BIN) throw std::runtime_error(std::string(what) + " is not binary data");
+    return o.via.bin;
+}
+
+// The number of values a shape holds, or an error if the shape's product overflows.
+std::uint64_t values_in(const std::vector<std::uint64_t>& shape, const char* what) {
+    std::uint64_t n = 1;
+    for (std::uint64_t d : shape) {
+        if (d != 0 && n > UINT64_MAX / d) throw std::runtime_error(std::string(what) + ": the shape overflows");
+        n *= d;
+    }
+    return n;
+}
+
+F64Array unpack_array(const msgpack::object& o, const char* what) {
+    const auto& a = array_of(o, 2, 2, what);
+    F64Array r;
+    a.ptr[0].convert(r.shape);
+    const auto& bin = bin_of(a.ptr[1], what);
+    if (bin.size % sizeof(double) != 0 || bin.size / sizeof(double) != values_in(r.shape, what))
+        throw std::runtime_error(std::string(what) + ": " + std::to_string(bin.size) + " bytes of data for its shape");
+    r.values.resize(bin.size / sizeof(double));
+    if (bin.size > 0) std::memcpy(r.values.data(), bin.ptr, bin.size);
+    return r;
+}
+
+// The interface arrays are per vertex, and the cells index the vertices.
+void check_interface(const InterfaceState& s) {
+    const std::size_t n = s.mesh.vertices.values.size();
+    const std::pair<const F64Array*, const char*> per_vertex[] = {
+        {&s.displacement, "displacement"}, {&s.velocity, "velocity"}, {&s.previous_displacement, "previous displacement"},
+        {&s.force, "force"}, {&s.fluid_displacement, "fluid displacement"}};
+    for (const auto& [array, what] : per_vertex)
+        if (array->values.size() != n)
+            throw std::runtime_error(std::string("the interface ") + what + " has " + std::to_string(array->values.size()) +
+                                     " values for " + std::to_string(n) + " vertex coordinates");
+    if (s.mesh.cells.values.size() != values_in(s.mesh.cells.shape, "the interface cells"))
+        throw std::runtime_error("the interface cells do not fill their shape");
+    for (std::int32_t v : s.mesh.cells.values)
+        if (v < 0 || 2 * static_cast<std::uint64_t>(v) >= n)
+            throw std::runtime_error("an interface cell names vertex " + std::to_string(v) + ", which does not exist");
 }
 }  // namespace
 
@@ -77,10 +125,12 @@ Checkpoint read_checkpoint(const std::filesystem::path& file) {
     std::string bytes = s.str();
     try {
         auto oh = msgpack::unpack(bytes.data(), bytes.size());
-        const auto& a = oh.get().via.array;
+        const auto& top = oh.get();
         // 14 entries before the loop times were added as the 15th (2026-11-27).
-        if (a.size < 14 || a.size > 15 || a.ptr[0].as<std::string>() != "sphfsi-checkpoint-1")
+        if (top.type != msgpack::type::ARRAY || top.via.array.size < 14 || top.via.array.size > 15 ||
+            top.via.array.ptr[0].type != msgpack::type::STR || top.via.array.ptr[0].as<std::string>() != "sphfsi-checkpoint-1")
             throw std::runtime_error("not a checkpoint of this version");
+        const auto& a = top.via.array;
         Checkpoint c;
         c.scene_file = a.ptr[1].as<std::string>();
         c.scene_text = a.ptr[2].as<std::string>();
@@ -92,19 +142,20 @@ Checkpoint read_checkpoint(const std::filesystem::path& file) {
         c.steps = a.ptr[8].as<std::uint64_t>();
         c.fluid_dt = a.ptr[9].as<double>();
         c.structure_dt = a.ptr[10].as<double>();
-        const auto& i = a.ptr[11].via.array;
-        c.interface.mesh.vertices = unpack_array(i.ptr[0]);
+        const auto& i = array_of(a.ptr[11], 6, 6, "the interface");
+        c.interface.mesh.vertices = unpack_array(i.ptr[0], "the interface vertices");
         i.ptr[1].convert(c.interface.mesh.cells.shape);
         i.ptr[2].convert(c.interface.mesh.cells.values);
-        c.interface.displacement = unpack_array(i.ptr[3]);
-        c.interface.velocity = unpack_array(i.ptr[4]);
-        c.interface.previous_displacement = unpack_array(i.ptr[5]);
-        const auto& coupling = a.ptr[12].via.array;
-        c.interface.force = unpack_array(coupling.ptr[0]);
+        c.interface.displacement = unpack_array(i.ptr[3], "the interface displacement");
+        c.interface.velocity = unpack_array(i.ptr[4], "the interface velocity");
+        c.interface.previous_displacement = unpack_array(i.ptr[5], "the previous interface displacement");
+        const auto& coupling = array_of(a.ptr[12], 2, 7, "the coupling state");
+        c.interface.force = unpack_array(coupling.ptr[0], "the interface force");
         c.interface.previous_dt = coupling.ptr[1].as<double>();
         // (Checkpoints written before the interface energy balance lack it: the fluid's displacement then
         // starts from the structure's and the balance from zero.)
-        c.interface.fluid_displacement = coupling.size > 2 ? unpack_array(coupling.ptr[2]) : c.interface.displacement;
+        c.interface.fluid_displacement = coupling.size > 2 ? unpack_array(coupling.ptr[2], "the fluid's interface displacement")
+                                                             : c.interface.displacement;
         if (coupling.size > 5) {
             c.interface.work_total = coupling.ptr[3].as<double>();
             c.interface.created_total = coupling.ptr[4].as<double>();
@@ -112,16 +163,16 @@ Checkpoint read_checkpoint(const std::filesystem::path& file) {
         }
         // Else from the next window. Builds before 2026-11-27 wrote 0 for "not known yet".
         if (coupling.size > 6 && coupling.ptr[6].as<double>() != 0.0) c.interface.total_energy = coupling.ptr[6].as<double>();
+        check_interface(c.interface);
+        if (a.ptr[13].type != msgpack::type::MAP) throw std::runtime_error("the participants' states are not a map");
         const auto& m = a.ptr[13].via.map;
         for (std::uint32_t k = 0; k < m.size; ++k) {
-            const auto& bin = m.ptr[k].val.via.bin;
+            const auto& bin = bin_of(m.ptr[k].val, "a participant's state");
             const auto* p = reinterpret_cast<const std::uint8_t*>(bin.ptr);
             c.states[m.ptr[k].key.as<std::string>()] = std::vector<std::uint8_t>(p, p + bin.size);
         }
         if (a.size > 14) {
-            if (a.ptr[14].type != msgpack::type::ARRAY || a.ptr[14].via.array.size != 2)
-                throw std::runtime_error("the loop times are not an array of two numbers");
-            const auto& loop = a.ptr[14].via.array;
+            const auto& loop = array_of(a.ptr[14], 2, 2, "the loop times");
             c.loop_wall_s = loop.ptr[0].as<double>();
             c.loop_cpu_s = loop.ptr[1].as<double>();
         }
