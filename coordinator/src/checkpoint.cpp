@@ -37,8 +37,10 @@ const msgpack::object_bin& bin_of(const msgpack::object& o, const char* what) {
     return o.via.bin;
 }
 
-// The number of values a shape holds, or an error if the shape's product overflows.
+// The number of values a shape holds (none for no shape: a fluid alone has no interface), or an error if the
+// shape's product overflows.
 std::uint64_t values_in(const std::vector<std::uint64_t>& shape, const char* what) {
+    if (shape.empty()) return 0;
     std::uint64_t n = 1;
     for (std::uint64_t d : shape) {
         if (d != 0 && n > UINT64_MAX / d) throw std::runtime_error(std::string(what) + ": the shape overflows");
