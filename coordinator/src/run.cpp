@@ -91,6 +91,11 @@ private:
     void loop();
     WindowOutcome advance_alone(const WindowPlan& plan);
     WindowPlan plan_window(double t_stop) const;
+    struct Stop {
+        double t;         // the time the next windows land on
+        bool checkpoint;  // a checkpoint is taken there
+    };
+    Stop next_stop() const;
     void record_window(const WindowPlan& plan, const WindowOutcome& o, double wall_s, const InterfaceWork& work);
     void snapshot_all();
     void checkpoint();
@@ -367,6 +372,24 @@ WindowPlan Runner::plan_window(double t_stop) const {
     return p;
 }
 
+// Windows land exactly on frame times (frame k at k * output_interval; frame 0 is the initial state), on
+// checkpoint times (checkpoint k at k * checkpoint_interval) and on the end, never past it. Two of these closer
+// than a sliver are taken as one, or the gap between them would be a window of its own, down to 1e-11 s
+// (whose fluid force had been 25 times its neighbours'): a frame due a sliver before the end is taken at the end,
+// and a checkpoint due within a sliver of a frame, or of the end, is taken with that frame, or not at all (a
+// resume needs none at the end). Frames keep their times. A sliver is a quarter of the window the coupling
+// rule wants, or of the participant's own step when it runs alone (its window is then the whole gap).
+Runner::Stop Runner::next_stop() const {
+    const double frame_due = std::min(output_index_ * output_dt_, end_);
+    const double checkpoint_due = (checkpoint_index_ + 1) * checkpoint_dt_;
+    const double sliver = 0.25 * (coupled_ ? plan_window(std::min(frame_due, checkpoint_due)).wanted
+                                           : (fluid_ ? fluid_dt_ : structure_dt_));
+    const double frame = end_ - frame_due < sliver ? end_ : frame_due;
+    if (checkpoint_due >= end_ - sliver) return {frame, false};
+    if (std::abs(checkpoint_due - frame) < sliver) return {frame, true};
+    return checkpoint_due < frame ? Stop{checkpoint_due, true} : Stop{frame, false};
+}
+
 WindowOutcome Runner::advance_alone(const WindowPlan& p) {
     WindowOutcome o;
     if (fluid_) {
@@ -389,21 +412,9 @@ void Runner::loop() {
     loop_cpu_start_ = cpu_seconds();
     const double eps = 1e-12 * std::max(1.0, end_);
     while (t_ < end_ - eps) {
-        // Windows land exactly on output and checkpoint times, and on the end. Frame k is due at
-        // k * output_interval (frame 0 is the initial state), checkpoint k at k * checkpoint_interval.
-        double t_out = output_index_ * output_dt_;
-        double t_ckpt = (checkpoint_index_ + 1) * checkpoint_dt_;
-        double t_stop = std::min({t_out, t_ckpt, end_});
-        WindowPlan plan = plan_window(t_stop);
-        // Two stops closer than a quarter of the window wanted (an output time a hair before the end) are
-        // taken as one, at the later: the gap between them would be a sliver of a window of its own.
-        double t_next = t_stop;
-        for (double s : {t_out, t_ckpt, end_})
-            if (s > t_stop + eps && (t_next == t_stop || s < t_next)) t_next = s;
-        if (t_next > t_stop && t_next - t_stop < 0.25 * plan.wanted) {
-            t_stop = t_next;
-            plan = plan_window(t_stop);
-        }
+        const Stop stop = next_stop();
+        const double t_stop = stop.t;
+        const WindowPlan plan = plan_window(t_stop);
         const F64Array structure_start = iface_.displacement, fluid_start = iface_.fluid_displacement;
         auto start = Clock::now();
         WindowOutcome o = coupled_ ? scheme_->run(plan, iface_) : advance_alone(plan);
@@ -426,7 +437,7 @@ void Runner::loop() {
         progress_->update(t_, steps_);
         // Frames at k * output_interval, and the end's state whether or not end_time is one of those.
         if (t_ >= output_index_ * output_dt_ - eps || t_ >= end_ - eps) snapshot_all();
-        if (t_ >= (checkpoint_index_ + 1) * checkpoint_dt_ - eps && t_ < end_ - eps) checkpoint();
+        if (stop.checkpoint && t_ == t_stop) checkpoint();
     }
 }
 

@@ -134,5 +134,25 @@ def test_the_end_is_recorded_when_it_is_not_an_output_time():
             assert abs(f["windows/t"][-1] - 0.05) < 1e-12
 
 
+def test_frames_keep_their_times_and_no_window_passes_the_end():
+    """Two stops a sliver apart are taken as one (test_coupled.py), but never past the end and never by moving a
+    frame onto a checkpoint's time: before a review on 2026-11-27, an output time a sliver past the end pulled
+    the last window there (beam_only to 0.05 s every 0.0101 s ended at 0.0505 s, "completed", with no frame at
+    0.05 s), and checkpoints every 0.0101 s moved the frames due every 0.01 s onto them. A structure alone
+    counts slivers in its own steps (here about 1e-3 s), so 1e-4 s apart are two stops."""
+    scene = os.path.join(harness.ROOT, "scenarios", "beam_only.toml")
+    cases = ((["run.output_interval=0.0101"], [0.0, 0.0101, 0.0202, 0.0303, 0.0404, 0.05]),
+             (["run.output_interval=0.01", "run.checkpoint_interval=0.0101"], [0.0, 0.01, 0.02, 0.03, 0.04, 0.05]))
+    for settings, frames in cases:
+        out = harness.out_dir("stops")
+        harness.sphfsi("run", scene, "--out", out, "--quiet", "--set", "run.end_time=0.05",
+                       *[a for s in settings for a in ("--set", s)], check=0, timeout=60)
+        with harness.record(os.path.join(out, "record.h5")) as f:
+            times = list(f["frames/structure/time"][:])
+            assert f.attrs["status"] == "completed", f.attrs["status"]
+            assert len(times) == len(frames) and all(abs(a - b) < 1e-12 for a, b in zip(times, frames)), (settings, times)
+            assert max(f["windows/t"][:]) <= 0.05 * (1 + 1e-12), (settings, f["windows/t"][-3:])
+
+
 if __name__ == "__main__":
     harness.main(globals())
