@@ -2,12 +2,12 @@
 
 #include <algorithm>
 #include <cctype>
-#include <fstream>
 #include <limits>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 
+#include "sphfsi/coordinator/replace_file.hpp"
 #include "sphfsi/protocol/codec.hpp"
 
 namespace sphfsi::coordinator {
@@ -371,13 +371,9 @@ void Recorder::write_xdmf(const std::string& role) {
     x << "</Grid>\n</Domain>\n</Xdmf>\n";
     auto out = file_;
     out.replace_extension(".xdmf");
-    auto tmp = out;
-    tmp += ".tmp";
-    {
-        std::ofstream f(tmp);
-        f << x.str();
-    }
-    std::filesystem::rename(tmp, out);  // atomic: ParaView never reads half a file
+    // Atomic, and checked: ParaView never reads half a file, and a full disk stops the run with the cause
+    // instead of replacing a good sidecar with an empty one.
+    replace_file(out, x.str(), "the XDMF sidecar");
 }
 
 }  // namespace sphfsi::coordinator

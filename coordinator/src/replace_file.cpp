@@ -12,7 +12,7 @@ void replace_file(const std::filesystem::path& file, std::string_view bytes, std
     {
         std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
         out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-        out.flush();
+        out.close();  // a full disk may show only here, as the last buffer is written
         if (!out) throw std::runtime_error("cannot write " + std::string(what) + " " + tmp.string());
     }
     std::filesystem::rename(tmp, file);

@@ -6,13 +6,15 @@
 #include <cstdlib>
 #include <iterator>
 #include <sstream>
+#include <stdexcept>
 
 #include "sphfsi/coordinator/replace_file.hpp"
 
 namespace sphfsi::coordinator {
 
 Watchpoints::Watchpoints(const std::filesystem::path& file, const Value& scene, const protocol::InterfaceMesh& mesh,
-                         bool append, double resume_t) {
+                         bool append, double resume_t)
+    : file_(file) {
     if (const Value* list = scene.find("watchpoint")) {
         for (const Value& w : list->as_array()) {
             Point p{w.at("name").as_string(), w.at("x").as_double(), w.at("y").as_double(), {}};
@@ -38,6 +40,7 @@ Watchpoints::Watchpoints(const std::filesystem::path& file, const Value& scene, 
     if (!append || !std::filesystem::exists(file)) {
         out_.open(file, std::ios::trunc);
         out_ << header;
+        flush();
         return;
     }
     // A resume keeps the rows up to the checkpoint: whole rows only (a kill can cut the last one short), in
@@ -58,6 +61,7 @@ Watchpoints::Watchpoints(const std::filesystem::path& file, const Value& scene, 
     }
     replace_file(file, kept, "watchpoints");
     out_.open(file, std::ios::app);
+    flush();
 }
 
 void Watchpoints::write(double t, const protocol::F64Array& displacement) {
@@ -67,6 +71,11 @@ void Watchpoints::write(double t, const protocol::F64Array& displacement) {
         std::snprintf(line, sizeof line, "%.12g,%s,%.12g,%.12g,%.12g,%.12g\n", t, p.name.c_str(), p.x + d[0], p.y + d[1], d[0], d[1]);
         out_ << line;
     }
+}
+
+void Watchpoints::flush() {
+    out_.flush();
+    if (!out_) throw std::runtime_error("cannot write " + file_.string() + " (is the disk full?)");
 }
 
 }  // namespace sphfsi::coordinator

@@ -313,6 +313,21 @@ def test_a_record_that_cannot_grow_stops_the_run_and_reads_back():
         assert f.attrs["status"] == "running"  # the record holds the state of its last whole flush
 
 
+def test_a_sidecar_that_cannot_be_written_stops_the_run():
+    """The XDMF sidecar is replaced whole at each frame (record.xdmf.tmp, renamed over record.xdmf). Its write
+    was unchecked: a full disk left a 0-byte record.xdmf under a "completed" run (a review, 2026-11-27). Here
+    the temporary file cannot be opened (a directory stands in its place), which the write must report."""
+    out = harness.out_dir("sidecar")
+    os.makedirs(os.path.join(out, "record.xdmf.tmp"))
+    scene = os.path.join(harness.ROOT, "scenarios", "fluid_only.toml")
+    code, text = harness.sphfsi("run", scene, "--out", out, "--quiet", "--set", "run.end_time=0.02", "--set",
+                                "run.output_interval=0.01", timeout=60)
+    assert code == 1 and "cannot write the XDMF sidecar" in text, (code, text)
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert f.attrs["status"].startswith("failed: cannot write the XDMF sidecar"), f.attrs["status"]
+        assert len(f["frames/fluid/time"]) >= 1
+
+
 def test_listen_mode_waits_for_a_remote_participant():
     out = harness.out_dir("listen")
     scene = os.path.join(harness.SCENES, "rigid_plate_step.toml")

@@ -18,7 +18,8 @@ public:
                 bool append, double resume_t);
     void write(double t, const protocol::F64Array& displacement);
     bool empty() const { return points_.empty(); }
-    void flush() { out_.flush(); }
+    // Throws std::runtime_error if any row since the last flush could not be written (a full disk).
+    void flush();
 
 private:
     struct Point {
@@ -27,6 +28,7 @@ private:
         protocol::MappedPoint where;
     };
     std::vector<Point> points_;
+    std::filesystem::path file_;
     std::ofstream out_;
 };
 
