@@ -91,24 +91,43 @@ Recorder::Recorder(std::filesystem::path file, const RunMetadata& meta, std::opt
         return;
     }
     // The interrupted run may have been killed in the middle of a write, so its file is not appended to:
-    // what it holds up to the checkpoint is copied into a new file beside it, which then replaces it in one
-    // rename and takes the rest of the run. Killed before the rename, a resume leaves record.h5 as it was
-    // (and a stale record.h5.resuming, replaced by the next try); after it, record.h5 holds the history and
-    // everything since. Builds before 2026-11-25 renamed record.h5 to record.h5.interrupted first, so a resume
-    // of theirs that died left the history in that file: refuse to guess which file is whole.
+    // what it holds up to the checkpoint is copied into a new file beside it, which takes the rest of the run
+    // and replaces record.h5 in one rename once it reaches the time record.h5 ends at (take_over_when_caught_up).
+    // Until then record.h5 holds more than the copy: a resume that fails, is stopped or is killed before it
+    // leaves record.h5 as it was (and, killed, a stale record.h5.resuming, replaced by the next try); after
+    // it, record.h5 holds the history and everything since. Builds before 2026-11-25 renamed record.h5 to
+    // record.h5.interrupted first, so a resume of theirs that died left the history in that file: refuse to
+    // guess which file is whole.
     auto interrupted = file_;
     interrupted += ".interrupted";
     if (std::filesystem::exists(interrupted))
         throw std::runtime_error(interrupted.string() + " is left from a resume that did not finish and may hold history that " +
                                  file_.string() + " lacks: keep the file you want as " + file_.filename().string() +
                                  ", remove the other, and resume again");
-    auto resuming = file_;
-    resuming += ".resuming";
-    h5_ = h5::create_file(resuming.string());
+    resuming_ = file_;
+    resuming_ += ".resuming";
+    h5_ = h5::create_file(resuming_.string());
     copy_history(file_, *resume_at);
     set_status("running (resumed)");
     flush();
-    std::filesystem::rename(resuming, file_);  // the open handle follows the file: it is the same inode
+}
+
+bool Recorder::take_over_when_caught_up(double t) {
+    if (resuming_.empty() || t < history_end_ * (1 - 1e-12)) return false;
+    flush();
+    std::filesystem::rename(resuming_, file_);  // the open handle follows the file: it is the same inode
+    resuming_.clear();
+    for (const auto& [role, times] : frame_times_)
+        if (series_.count("/frames/" + role + "/position")) write_xdmf(role);
+    return true;
+}
+
+void Recorder::abandon_resume() {
+    if (resuming_.empty()) return;
+    series_.clear();  // the datasets first: HDF5 keeps a file open while any of its objects is
+    h5_.reset();
+    std::filesystem::remove(resuming_);
+    resuming_.clear();
 }
 
 // Copies the interrupted run's record up to time `until`: the scene, participants and root attributes
@@ -127,6 +146,7 @@ void Recorder::copy_history(const std::filesystem::path& old_file, double until)
     auto rows_until = [&](const std::string& time_path) -> hsize_t {
         if (!h5::exists(src.get(), time_path)) return 0;
         std::vector<double> t = read_all(time_path);
+        if (!t.empty()) history_end_ = std::max(history_end_, t.back());
         hsize_t keep = 0;
         while (keep < t.size() && t[keep] <= until * (1 + 1e-12)) ++keep;
         return keep;
@@ -312,6 +332,7 @@ void Recorder::set_number(const std::string& name, double value) { h5::set_attri
 void Recorder::set_text(const std::string& name, const std::string& value) { h5::set_attribute(h5_.get(), name, value); }
 
 void Recorder::flush() {
+    if (!h5_) return;  // an abandoned resume's copy, removed
     if (!window_columns_.empty() && !window_buffer_[0].empty()) {
         for (std::size_t i = 0; i < window_columns_.size(); ++i) {
             series("/windows/" + window_columns_[i], {}, false, 4096).append(window_buffer_[i].data(), window_buffer_[i].size());
@@ -330,6 +351,7 @@ void Recorder::flush() {
 
 // XDMF 3 sidecar: a temporal collection of point clouds read straight from the HDF5 datasets.
 void Recorder::write_xdmf(const std::string& role) {
+    if (!resuming_.empty()) return;  // record.h5 is still the interrupted run's, which its sidecar describes
     const std::string group = "/frames/" + role + "/";
     const auto& pos = series_.at(group + "position");
     const hsize_t n = pos.row_shape().empty() ? 0 : pos.row_shape()[0];

@@ -8,6 +8,7 @@
 #include <csignal>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <optional>
 #include <random>
 #include <sstream>
@@ -96,6 +97,11 @@ private:
         bool checkpoint;  // a checkpoint is taken there
     };
     Stop next_stop() const;
+    // A resume's copies replace record.h5 and watchpoints.csv once the run has reached the time the interrupted
+    // record ends at: until then those hold more than the copies, and a resume that stops must leave them.
+    void take_over_when_caught_up() {
+        if (recorder_->take_over_when_caught_up(t_) && watchpoints_) watchpoints_->take_over();
+    }
     void record_window(const WindowPlan& plan, const WindowOutcome& o, double wall_s, const InterfaceWork& work);
     void snapshot_all();
     void checkpoint();
@@ -168,7 +174,7 @@ int Runner::execute() {
         return 2;
     }
     if (!resume)  // a fresh run: what an earlier run left here must not be resumed or read as this run's
-        for (const char* stale : {"checkpoint.bin", "record.xdmf", "watchpoints.csv", "watchpoints.csv.tmp",
+        for (const char* stale : {"checkpoint.bin", "record.xdmf", "watchpoints.csv", "watchpoints.csv.tmp", "watchpoints.csv.resuming",
                                   "record.h5.resuming", "record.h5.creating"})
             std::filesystem::remove(opt_.out_dir / stale);
     log_file_.open(opt_.out_dir / "run.log", resume ? std::ios::app : std::ios::trunc);
@@ -199,6 +205,7 @@ int Runner::execute() {
     int code = 0;
     try {
         initialise(resume);
+        take_over_when_caught_up();
         loop();
     } catch (const ParticipantFailure& e) {
         log(std::string("error: ") + e.what());
@@ -231,6 +238,16 @@ int Runner::execute() {
     recorder_->set_status(status);
     recorder_->flush();
     if (watchpoints_) watchpoints_->flush();
+    if (code == 0) {  // a completed resume replaces the interrupted record whatever time that record reached
+        if (recorder_->take_over_when_caught_up(std::numeric_limits<double>::infinity()) && watchpoints_)
+            watchpoints_->take_over();
+    } else if (recorder_->resume_pending()) {
+        log("the resumed run stopped at t = " + std::to_string(t_) + " s, before t = " +
+            std::to_string(recorder_->history_end()) + " s, where the interrupted run's record ends: " +
+            recorder_->file().filename().string() + " and watchpoints.csv are left as that run left them");
+        recorder_->abandon_resume();
+        if (watchpoints_) watchpoints_->abandon_resume();
+    }
     if (code == 0) log("done: t = " + std::to_string(t_) + " s, " + std::to_string(windows_) + " windows; record in " +
                        recorder_->file().string());
     return code;
@@ -438,6 +455,7 @@ void Runner::loop() {
         // Frames at k * output_interval, and the end's state whether or not end_time is one of those.
         if (t_ >= output_index_ * output_dt_ - eps || t_ >= end_ - eps) snapshot_all();
         if (stop.checkpoint && t_ == t_stop) checkpoint();
+        take_over_when_caught_up();
     }
 }
 

@@ -44,8 +44,9 @@ Watchpoints::Watchpoints(const std::filesystem::path& file, const Value& scene, 
         return;
     }
     // A resume keeps the rows up to the checkpoint: whole rows only (a kill can cut the last one short), in
-    // time order up to the first one beyond it. They go to a new file that replaces the old one once it is
-    // on disk, so a resume stopped before its first frame still leaves them (as the record keeps its frames).
+    // time order up to the first one beyond it. They go to FILE.resuming, which takes the resumed rows and
+    // replaces the file when the record's copy replaces record.h5 (take_over): a resume stopped before then
+    // leaves both as the interrupted run left them.
     std::ifstream in(file);
     std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     std::string kept = header;
@@ -59,9 +60,25 @@ Watchpoints::Watchpoints(const std::filesystem::path& file, const Value& scene, 
             break;
         kept += line + "\n";
     }
-    replace_file(file, kept, "watchpoints");
-    out_.open(file, std::ios::app);
+    resuming_ = file;
+    resuming_ += ".resuming";
+    replace_file(resuming_, kept, "watchpoints");
+    out_.open(resuming_, std::ios::app);
     flush();
+}
+
+void Watchpoints::take_over() {
+    if (resuming_.empty()) return;
+    flush();
+    std::filesystem::rename(resuming_, file_);  // the open stream follows the file: it is the same inode
+    resuming_.clear();
+}
+
+void Watchpoints::abandon_resume() {
+    if (resuming_.empty()) return;
+    out_.close();
+    std::filesystem::remove(resuming_);
+    resuming_.clear();
 }
 
 void Watchpoints::write(double t, const protocol::F64Array& displacement) {
@@ -74,8 +91,9 @@ void Watchpoints::write(double t, const protocol::F64Array& displacement) {
 }
 
 void Watchpoints::flush() {
+    if (!out_.is_open()) return;  // an abandoned resume's rows, removed
     out_.flush();
-    if (!out_) throw std::runtime_error("cannot write " + file_.string() + " (is the disk full?)");
+    if (!out_) throw std::runtime_error("cannot write " + (resuming_.empty() ? file_ : resuming_).string() + " (is the disk full?)");
 }
 
 }  // namespace sphfsi::coordinator

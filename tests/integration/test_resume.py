@@ -2,7 +2,9 @@
 state as an uninterrupted run, to 1e-10 relative (issue 5's criterion; both runs take the same windows,
 so the only allowed difference is none at all, and the bound leaves room for nothing but round-off)."""
 import os
+import shutil
 import signal
+import subprocess
 import time
 
 import numpy as np
@@ -143,6 +145,39 @@ def test_a_resume_stopped_at_any_moment_keeps_the_history():
     t, x = fluid_history(cut, 1.0)
     assert np.array_equal(t[:times.size], times) and np.array_equal(x[:times.size], positions)
     assert t.size == 401 and np.all(np.diff(t) > 0) and abs(t[-1] - 0.2) < 1e-9, (t.size, t[-3:])
+
+
+def test_a_resume_that_stops_before_catching_up_leaves_the_record_as_it_was():
+    """The interrupted record goes on past its last checkpoint; a resume copies it up to the checkpoint and the
+    copy replaces record.h5 only once the resumed run has reached where the record ended. Before a review on
+    2026-11-27 the copy replaced it at once, so a resume that then failed (here: no participant programs beside
+    the coordinator) left the record cut back to the checkpoint for good: frames 21 -> 11 of beam_only to 1 s,
+    with its interface totals and loop times zero. Now record.h5 and watchpoints.csv stay byte for byte, no
+    copy is left behind, and a resume that can run still completes the record."""
+    out = harness.out_dir("resume-fails")
+    harness.sphfsi("run", SCENE, "--out", out, "--quiet", "--set", "run.end_time=1.0", "--set",
+                   "run.checkpoint_interval=0.5", "--set", "run.output_interval=0.05", check=0, timeout=60)
+    import h5py
+    with h5py.File(os.path.join(out, "record.h5"), "r+", locking=False) as f:
+        f.attrs["status"] = "running"  # as a run killed after its checkpoint at 0.5 s leaves it, 0.5 s later
+    before = {}
+    for name in ("record.h5", "watchpoints.csv"):
+        with open(os.path.join(out, name), "rb") as f:
+            before[name] = f.read()
+    alone = harness.out_dir("coordinator-alone")
+    shutil.copy(os.path.join(harness.BIN, "sphfsi"), alone)
+    p = subprocess.run([os.path.join(alone, "sphfsi"), "run", "--resume", out, "--quiet"], capture_output=True,
+                       text=True, timeout=60)
+    assert p.returncode == 1 and "where the interrupted run's record ends" in p.stderr, (p.returncode, p.stderr)
+    for name, data in before.items():
+        with open(os.path.join(out, name), "rb") as f:
+            assert f.read() == data, f"{name} changed"
+    left = sorted(n for n in os.listdir(out) if n.endswith(".resuming"))
+    assert not left, left
+    code, text = harness.sphfsi("run", "--resume", out, "--quiet", timeout=60)
+    assert code == 0, text
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert f.attrs["status"] == "completed" and f["frames/structure/time"].shape[0] == 21
 
 
 def test_a_resume_keeps_the_window_columns_of_the_interrupted_run():

@@ -48,9 +48,18 @@ std::string record_status(const std::filesystem::path& file);
 
 class Recorder {
 public:
-    // Creates `file` (replacing it), or with `resume_at` reopens it and drops everything after that time.
+    // Creates `file` (replacing it), or with `resume_at` copies what it holds up to that time into FILE.resuming,
+    // which records the resumed run and replaces `file` once the run reaches the time `file` ends at.
     Recorder(std::filesystem::path file, const RunMetadata& meta, std::optional<double> resume_at = std::nullopt);
     ~Recorder();
+
+    // A resume's copy replaces `file` when `t` has reached the time the interrupted record ends at; true if it
+    // did so now (the XDMF sidecar is written then: until then it describes the interrupted record).
+    bool take_over_when_caught_up(double t);
+    bool resume_pending() const { return !resuming_.empty(); }
+    double history_end() const { return history_end_; }
+    // Removes a resume's copy that has not replaced `file`, which stays as the interrupted run left it.
+    void abandon_resume();
 
     // Throws RecordRefused, writing nothing, on an `info` key that is not a plain name (see append_frame).
     void set_participant(const std::string& role, const std::string& software, const Value& info);
@@ -81,6 +90,8 @@ private:
     h5::Series& series(const std::string& path, const std::vector<hsize_t>& row_shape, bool is_int, hsize_t chunk_rows);
 
     std::filesystem::path file_;
+    std::filesystem::path resuming_;  // a resume's copy while it has not replaced file_
+    double history_end_ = 0.0;        // the last time the interrupted record holds (a window or a frame)
     h5::Handle h5_;
     std::map<std::string, h5::Series> series_;
     std::vector<std::string> window_columns_;
