@@ -146,7 +146,8 @@ void Recorder::copy_history(const std::filesystem::path& old_file, double until)
     auto rows_until = [&](const std::string& time_path) -> hsize_t {
         if (!h5::exists(src.get(), time_path)) return 0;
         std::vector<double> t = read_all(time_path);
-        if (!t.empty()) history_end_ = std::max(history_end_, t.back());
+        for (double x : t)  // the largest, not the last: a kill can leave a row extended but unwritten (0)
+            if (x > history_end_) history_end_ = x;
         hsize_t keep = 0;
         while (keep < t.size() && t[keep] <= until * (1 + 1e-12)) ++keep;
         return keep;
