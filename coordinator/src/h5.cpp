@@ -1,5 +1,6 @@
 #include "sphfsi/coordinator/h5.hpp"
 
+#include <exception>
 #include <stdexcept>
 
 #include "sphfsi/coordinator/ordered_file.hpp"
@@ -53,10 +54,10 @@ Series::Series(hid_t parent, const std::string& path, std::vector<hsize_t> row_s
     }
     Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), maxdims.data()), H5Sclose, "create space");
     Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "create dataset properties");
-    H5Pset_chunk(dcpl.get(), static_cast<int>(chunk.size()), chunk.data());
+    check(H5Pset_chunk(dcpl.get(), static_cast<int>(chunk.size()), chunk.data()), "chunk " + path, 0);
     if (compress) {
-        H5Pset_shuffle(dcpl.get());
-        H5Pset_deflate(dcpl.get(), 1);  // cheap compression: frames are written while the run goes on
+        check(H5Pset_shuffle(dcpl.get()), "shuffle " + path, 0);
+        check(H5Pset_deflate(dcpl.get(), 1), "compress " + path, 0);  // cheap: frames are written while the run goes on
     }
     create_groups(parent, parent_of(path));
     ds_ = Handle(H5Dcreate2(parent, path.c_str(), is_int ? H5T_STD_I32LE : H5T_IEEE_F64LE, space.get(), H5P_DEFAULT,
@@ -67,9 +68,10 @@ Series::Series(hid_t parent, const std::string& path, std::vector<hsize_t> row_s
 Series::Series(hid_t parent, const std::string& path) : path_(path) {
     ds_ = Handle(H5Dopen2(parent, path.c_str(), H5P_DEFAULT), H5Dclose, "open dataset " + path);
     Handle space(H5Dget_space(ds_.get()), H5Sclose, "get space");
-    int rank = H5Sget_simple_extent_ndims(space.get());
+    const int rank = H5Sget_simple_extent_ndims(space.get());
+    if (rank < 1) throw std::runtime_error("HDF5: " + path + " is not a dataset of rows");
     std::vector<hsize_t> dims(static_cast<std::size_t>(rank));
-    H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+    check(H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr), "read the shape of " + path, 0);
     rows_ = dims[0];
     row_shape_.assign(dims.begin() + 1, dims.end());
     Handle type(H5Dget_type(ds_.get()), H5Tclose, "get type");
@@ -86,7 +88,8 @@ void Series::append(const void* rows, hsize_t count) {
     }
     check(H5Dset_extent(ds_.get(), dims.data()), "extend " + path_, 0);
     Handle file_space(H5Dget_space(ds_.get()), H5Sclose, "get space");
-    H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start.data(), nullptr, n.data(), nullptr);
+    check(H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start.data(), nullptr, n.data(), nullptr),
+          "select rows of " + path_, 0);
     Handle mem_space(H5Screate_simple(static_cast<int>(n.size()), n.data(), nullptr), H5Sclose, "create space");
     check(H5Dwrite(ds_.get(), is_int_ ? H5T_NATIVE_INT32 : H5T_NATIVE_DOUBLE, mem_space.get(), file_space.get(), H5P_DEFAULT, rows),
           "write rows of " + path_, 0);
@@ -101,7 +104,8 @@ void Series::read(void* rows, hsize_t count) const {
         n.push_back(d);
     }
     Handle file_space(H5Dget_space(ds_.get()), H5Sclose, "get space");
-    H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start.data(), nullptr, n.data(), nullptr);
+    check(H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start.data(), nullptr, n.data(), nullptr),
+          "select rows of " + path_, 0);
     Handle mem_space(H5Screate_simple(static_cast<int>(n.size()), n.data(), nullptr), H5Sclose, "create space");
     check(H5Dread(ds_.get(), is_int_ ? H5T_NATIVE_INT32 : H5T_NATIVE_DOUBLE, mem_space.get(), file_space.get(), H5P_DEFAULT, rows),
           "read rows of " + path_, 0);
@@ -119,7 +123,7 @@ Handle create_file(const std::string& path, unsigned chunk_index_k) {
     Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "create file access properties");
     H5AC_cache_config_t mdc;
     mdc.version = H5AC__CURR_CACHE_CONFIG_VERSION;
-    H5Pget_mdc_config(fapl.get(), &mdc);
+    check(H5Pget_mdc_config(fapl.get(), &mdc), "read the metadata cache settings", 0);
     mdc.evictions_enabled = false;
     mdc.incr_mode = H5C_incr__off;
     mdc.flash_incr_mode = H5C_flash_incr__off;
@@ -127,7 +131,7 @@ Handle create_file(const std::string& path, unsigned chunk_index_k) {
     mdc.set_initial_size = true;
     mdc.initial_size = 16 * 1024 * 1024;
     mdc.max_size = 64 * 1024 * 1024;
-    H5Pset_mdc_config(fapl.get(), &mdc);
+    check(H5Pset_mdc_config(fapl.get(), &mdc), "set the metadata cache", 0);
     use_ordered_file_driver(fapl.get());  // every moment of a flush leaves a readable file (ordered_file.cpp)
     // No free-space manager: space HDF5 frees is not handed out again, as the file on disk may still refer
     // to it until the flush (a little space is lost when an attribute changes type). This takes a
@@ -150,8 +154,8 @@ namespace {
 // The type of the record's strings (datasets and attributes): variable-length UTF-8.
 Handle utf8_string_type() {
     Handle type(H5Tcopy(H5T_C_S1), H5Tclose, "copy type");
-    H5Tset_size(type.get(), H5T_VARIABLE);
-    H5Tset_cset(type.get(), H5T_CSET_UTF8);
+    check(H5Tset_size(type.get(), H5T_VARIABLE), "make a string type", 0);
+    check(H5Tset_cset(type.get(), H5T_CSET_UTF8), "make a string type", 0);
     return type;
 }
 }  // namespace
@@ -238,13 +242,18 @@ bool exists(hid_t parent, const std::string& path) {
 std::vector<std::string> children(hid_t file, const std::string& group) {
     std::vector<std::string> names;
     if (!exists(file, group)) return names;
-    H5Literate_by_name(
-        file, group.c_str(), H5_INDEX_NAME, H5_ITER_INC, nullptr,
-        [](hid_t, const char* name, const H5L_info_t*, void* out) -> herr_t {
-            static_cast<std::vector<std::string>*>(out)->push_back(name);
-            return 0;
-        },
-        &names, H5P_DEFAULT);
+    check(H5Literate_by_name(
+              file, group.c_str(), H5_INDEX_NAME, H5_ITER_INC, nullptr,
+              [](hid_t, const char* name, const H5L_info_t*, void* out) noexcept -> herr_t {
+                  try {  // nothing may be thrown through HDF5's C frames
+                      static_cast<std::vector<std::string>*>(out)->push_back(name);
+                      return 0;
+                  } catch (...) {
+                      return -1;
+                  }
+              },
+              &names, H5P_DEFAULT),
+          "list " + group, 0);
     return names;
 }
 
@@ -253,22 +262,37 @@ void copy_object(hid_t source, hid_t target, const std::string& path) {
 }
 
 void copy_root_attributes(hid_t source, hid_t target) {
-    H5Aiterate2(
+    // The callback runs inside HDF5's C code, which nothing may be thrown through: a failure is kept and
+    // rethrown once the iteration has returned.
+    struct Copy {
+        hid_t target;
+        std::exception_ptr failure;
+    } copy{target, nullptr};
+    const herr_t rc = H5Aiterate2(
         source, H5_INDEX_NAME, H5_ITER_NATIVE, nullptr,
-        [](hid_t loc, const char* name, const H5A_info_t*, void* out) -> herr_t {
-            hid_t dst = *static_cast<hid_t*>(out);
-            Handle attr(H5Aopen(loc, name, H5P_DEFAULT), H5Aclose, std::string("open attribute ") + name);
-            Handle type(H5Aget_type(attr.get()), H5Tclose, "attribute type");
-            Handle space(H5Aget_space(attr.get()), H5Sclose, "attribute space");
-            Handle copy(H5Acreate2(dst, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
-                        std::string("create attribute ") + name);
-            std::vector<unsigned char> buf(H5Tget_size(type.get()) * static_cast<std::size_t>(H5Sget_simple_extent_npoints(space.get())));
-            H5Aread(attr.get(), type.get(), buf.data());
-            H5Awrite(copy.get(), type.get(), buf.data());
-            if (H5Tis_variable_str(type.get()) > 0) H5Dvlen_reclaim(type.get(), space.get(), H5P_DEFAULT, buf.data());
-            return 0;
+        [](hid_t loc, const char* name, const H5A_info_t*, void* out) noexcept -> herr_t {
+            auto& c = *static_cast<Copy*>(out);
+            try {
+                Handle attr(H5Aopen(loc, name, H5P_DEFAULT), H5Aclose, std::string("open attribute ") + name);
+                Handle type(H5Aget_type(attr.get()), H5Tclose, "attribute type");
+                Handle space(H5Aget_space(attr.get()), H5Sclose, "attribute space");
+                Handle dst(H5Acreate2(c.target, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
+                           std::string("create attribute ") + name);
+                std::vector<unsigned char> buf(H5Tget_size(type.get()) *
+                                               static_cast<std::size_t>(H5Sget_simple_extent_npoints(space.get())));
+                check(H5Aread(attr.get(), type.get(), buf.data()), std::string("read attribute ") + name, 0);
+                const herr_t written = H5Awrite(dst.get(), type.get(), buf.data());
+                if (H5Tis_variable_str(type.get()) > 0) H5Dvlen_reclaim(type.get(), space.get(), H5P_DEFAULT, buf.data());
+                check(written, std::string("write attribute ") + name, 0);
+                return 0;
+            } catch (...) {
+                c.failure = std::current_exception();
+                return -1;
+            }
         },
-        &target);
+        &copy);
+    if (copy.failure) std::rethrow_exception(copy.failure);
+    check(rc, "copy the root attributes", 0);
 }
 
 }  // namespace sphfsi::coordinator::h5
