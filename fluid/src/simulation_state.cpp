@@ -2,6 +2,11 @@
 // implicit coupling and the byte checkpoints that resume a run bit-identically.
 #include "sphfsi/fluid/simulation.hpp"
 
+#include <cmath>
+#include <string>
+#include <type_traits>
+#include <utility>
+
 #include "sphfsi/protocol/solver.hpp"
 
 namespace sphfsi::fluid {
@@ -10,6 +15,65 @@ namespace {
 using protocol::SolverError;
 
 constexpr std::uint64_t checkpoint_magic = 0x3146495346485053ULL;  // "SPHFSIF1"
+
+[[noreturn]] void refuse(const std::string& what) {
+    throw SolverError("bad_config", "checkpoint: " + what + "; the file is damaged or was not written for this scene");
+}
+
+template <class T>
+void check_size(const std::vector<T>& a, std::size_t want, const char* name) {
+    if (a.size() != want)
+        refuse(std::string(name) + " has " + std::to_string(a.size()) + " entries for " + std::to_string(want) + " particles");
+}
+
+template <class T>
+void check_finite(const std::vector<T>& a, const char* name) {
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        bool finite = true;
+        if constexpr (std::is_arithmetic_v<T>) finite = std::isfinite(a[i]);
+        else for (double c : a[i].c) finite = finite && std::isfinite(c);
+        if (!finite) refuse(std::string(name) + " of entry " + std::to_string(i) + " is not a finite number");
+    }
+}
+
+// Everything a restored state's later steps index with or divide by is checked here, once: the header's
+// counts matched the scene, but a damaged array (one entry short, an id out of range, a kind that does not
+// exist, a NaN) had been accepted with READY and crashed the first step or snapshot (a review, 2026-11-27).
+template <class State, class V>
+void check_restored_state(const State& st, std::size_t n, std::size_t n_fluid, std::size_t n_solid,
+                          const std::vector<V>& solid_acc) {
+    const auto& P = st.P;
+    check_size(P.x, n, "position"); check_size(P.v, n, "velocity"); check_size(P.rho, n, "density"); check_size(P.id, n, "id");
+    check_size(P.tag, n, "tag"); check_size(P.kind, n, "kind"); check_size(P.a, n, "acceleration");
+    check_size(P.drho, n, "density rate"); check_size(P.p, n, "pressure"); check_size(P.v_visc, n, "viscous velocity");
+    check_size(P.div_r, n, "position divergence");
+    check_size(solid_acc, n_solid, "solid acceleration");
+    check_size(st.solid_force_sum, n_solid, "solid force sum");
+    std::vector<bool> seen(n, false);
+    for (std::int32_t id : P.id) {
+        if (id < 0 || static_cast<std::size_t>(id) >= n || seen[static_cast<std::size_t>(id)])
+            refuse("the particle ids are not 0 to " + std::to_string(n - 1) + " each once (id " + std::to_string(id) + ")");
+        seen[static_cast<std::size_t>(id)] = true;
+    }
+    std::size_t count[4] = {0, 0, 0, 0};
+    for (Kind k : P.kind) {
+        const auto c = static_cast<std::int8_t>(k);
+        if (c < 0 || c > 3) refuse("a particle has kind " + std::to_string(c) + "; kinds are 0 to 3");
+        ++count[static_cast<std::size_t>(c)];
+    }
+    if (count[0] + count[3] != n_fluid || count[2] != n_solid || count[3] != st.escaped)
+        refuse("its particle kinds (" + std::to_string(count[0]) + " fluid, " + std::to_string(count[3]) + " escaped of " +
+               std::to_string(st.escaped) + ", " + std::to_string(count[2]) + " solid) do not match its counts (" +
+               std::to_string(n_fluid) + " fluid, " + std::to_string(n_solid) + " solid)");
+    check_finite(P.x, "position"); check_finite(P.v, "velocity"); check_finite(P.rho, "density");
+    check_finite(P.a, "acceleration"); check_finite(P.drho, "density rate"); check_finite(P.p, "pressure");
+    check_finite(P.v_visc, "viscous velocity"); check_finite(P.div_r, "position divergence");
+    check_finite(solid_acc, "solid acceleration"); check_finite(st.solid_force_sum, "solid force sum");
+    for (const auto& [value, name] : {std::pair{st.t, "time"}, {st.a_max, "largest acceleration"},
+                                      {st.u_max, "largest speed"}, {st.rho_max, "largest density"},
+                                      {st.a_max_last, "last largest acceleration"}, {st.solid_weight, "solid weight"}})
+        if (!std::isfinite(value)) refuse(std::string("its ") + name + " is not a finite number");
+}
 
 }  // namespace
 
@@ -86,7 +150,9 @@ void Simulation2D::read_state(ByteReader& r) {
                                             std::to_string(n_solid_) + "): resume with the scene that wrote it");
     st_.t = r.get<double>();
     st_.step = r.get<std::uint64_t>();
-    st_.rates_fresh = r.get<std::uint8_t>() != 0;
+    const auto fresh = r.get<std::uint8_t>();
+    if (fresh > 1) refuse("its rates flag is " + std::to_string(fresh) + ", not 0 or 1");
+    st_.rates_fresh = fresh != 0;
     st_.a_max = r.get<double>();
     st_.u_max = r.get<double>();
     st_.rho_max = r.get<double>();
@@ -98,6 +164,7 @@ void Simulation2D::read_state(ByteReader& r) {
     r.get_vector(solid_acc_);
     r.get_vector(st_.solid_force_sum);
     st_.solid_weight = r.get<double>();
+    check_restored_state(st_, n, n_fluid_, n_solid_, solid_acc_);
     sort_particles();  // rebuild the grid for the restored positions (already in cell order: no reordering)
 }
 

@@ -72,6 +72,24 @@ void write_coupling_state(ByteWriter& w, const InterfaceCoupling::State& s) {
     w.put(s.t0); w.put(s.dt);
 }
 
+// The window state a resume restores: per-vertex arrays of the mesh's size, finite, and a window of length
+// >= 0 (0 between windows).
+void check_coupling_state(const InterfaceCoupling::State& s, std::size_t vertices) {
+    for (const auto& [a, name] : {std::pair{&s.u0, "start displacement"}, {&s.v0, "start velocity"},
+                                  {&s.u1, "end displacement"}, {&s.v1, "end velocity"}}) {
+        if (a->size() != vertices)
+            throw SolverError("bad_config", std::string("checkpoint: its interface window's ") + name + " has " +
+                                                std::to_string(a->size()) + " vertices, this INIT's mesh " +
+                                                std::to_string(vertices) + ": resume with the scene that wrote it");
+        for (const Vec2& x : *a)
+            if (!std::isfinite(x[0]) || !std::isfinite(x[1]))
+                throw SolverError("bad_config", std::string("checkpoint: its interface window's ") + name + " is not finite");
+    }
+    if (!std::isfinite(s.t0) || !(s.dt >= 0.0) || !std::isfinite(s.dt))
+        throw SolverError("bad_config", "checkpoint: its interface window (t0 = " + protocol::seconds(s.t0) +
+                                            ", dt = " + protocol::seconds(s.dt) + ") is not a finite time and length >= 0");
+}
+
 InterfaceCoupling::State read_coupling_state(ByteReader& r) {
     InterfaceCoupling::State s;
     r.get_vector(s.u0); r.get_vector(s.v0); r.get_vector(s.u1); r.get_vector(s.v1);
@@ -174,8 +192,10 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
         const auto& mesh = *request.interface;
         if (!start_displacement_.empty() && start_displacement_.size() != 2 * mesh.vertices.rows())
             throw SolverError("bad_config", "checkpoint: its start displacement has " +
-                                                std::to_string(start_displacement_.size() / 2) + " vertices, the mesh " +
-                                                std::to_string(mesh.vertices.rows()));
+                                                std::to_string(start_displacement_.size()) + " values for the mesh's " +
+                                                std::to_string(mesh.vertices.rows()) + " vertices (two each)");
+        for (double u : start_displacement_)
+            if (!std::isfinite(u)) throw SolverError("bad_config", "checkpoint: its start displacement is not finite");
         auto start = [&](std::uint64_t v, int axis) {
             const double u = start_displacement_.empty() ? 0.0 : start_displacement_[2 * v + static_cast<std::uint64_t>(axis)];
             return mesh.vertices(v, static_cast<std::uint64_t>(axis)) + u;
@@ -213,21 +233,25 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
         try {
             ByteReader& r = *saved;
             sim_->read_state(r);
-            const bool has_coupling = r.get<std::uint8_t>() != 0;
+            const auto coupling_flag = r.get<std::uint8_t>();
+            if (coupling_flag > 1)
+                throw SolverError("bad_config", "checkpoint: its interface flag is " + std::to_string(coupling_flag) + ", not 0 or 1");
+            const bool has_coupling = coupling_flag != 0;
             if (has_coupling != coupling_.has_value())
                 throw SolverError("bad_config", "checkpoint: it was written " + std::string(has_coupling ? "with" : "without") +
                                                     " an interface mesh, but this INIT " +
                                                     (coupling_ ? "has one" : "has none"));
             if (coupling_) {
                 const InterfaceCoupling::State state = read_coupling_state(r);
-                const std::size_t n = coupling_->vertex_count();
-                if (state.u0.size() != n || state.v0.size() != n || state.u1.size() != n || state.v1.size() != n)
-                    throw SolverError("bad_config", "checkpoint: its interface state has " + std::to_string(state.u0.size()) +
-                                                        " vertices, this INIT's mesh " + std::to_string(n) +
-                                                        ": resume with the scene that wrote it");
+                check_coupling_state(state, coupling_->vertex_count());
                 coupling_->set_state(state);
             }
             if (!r.at_end()) throw SolverError("bad_config", "checkpoint: trailing bytes");
+            // INIT's t0 is the coordinator's checkpoint time; the state carries its own. They must be one instant,
+            // or the first FRAME and ADVANCE would disagree about where the run is.
+            if (!protocol::same_instant(sim_->time(), request.t0, 0.0))
+                throw SolverError("bad_config", "checkpoint: its state is at t = " + protocol::seconds(sim_->time()) +
+                                                    ", but INIT resumes at t0 = " + protocol::seconds(request.t0));
         } catch (const std::runtime_error& e) {
             if (dynamic_cast<const SolverError*>(&e)) throw;
             throw SolverError("bad_config", e.what());

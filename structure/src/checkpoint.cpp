@@ -1,6 +1,7 @@
 #include "sphfsi/structure/checkpoint.hpp"
 
 #include <bit>
+#include <cmath>
 #include <cstring>
 #include <string_view>
 
@@ -72,11 +73,14 @@ State decode_state(const std::vector<std::uint8_t>& bytes, const Model& model) {
     if (head != magic) throw protocol::SolverError("bad_config", "structure: the resume state is not a structure checkpoint");
     const auto dofs = r.get<std::uint64_t>(), elements = r.get<std::uint64_t>();
     const double print = r.get<double>();
-    if (dofs != static_cast<std::uint64_t>(model.dof_count()) || elements != model.elements.size() ||
-        print != fingerprint(model))
-        throw protocol::SolverError("bad_config", "structure: the checkpoint belongs to a different mesh (" +
-                                                      std::to_string(elements) + " elements; this scene has " +
-                                                      std::to_string(model.elements.size()) + ")");
+    auto other_mesh = [](const std::string& what) {
+        return protocol::SolverError("bad_config", "structure: the checkpoint belongs to a different mesh (" + what + ")");
+    };
+    if (elements != model.elements.size())
+        throw other_mesh(std::to_string(elements) + " elements; this scene has " + std::to_string(model.elements.size()));
+    if (dofs != static_cast<std::uint64_t>(model.dof_count()))
+        throw other_mesh(std::to_string(dofs) + " degrees of freedom; this scene has " + std::to_string(model.dof_count()));
+    if (print != fingerprint(model)) throw other_mesh("other node positions or connections, by its fingerprint");
     State s;
     s.t = r.get<double>();
     s.step = r.get<std::uint64_t>();
@@ -86,6 +90,10 @@ State decode_state(const std::vector<std::uint8_t>& bytes, const Model& model) {
         r.raw(x->data(), sizeof(double) * x->size());
     }
     if (r.at != bytes.size()) throw protocol::SolverError("bad_config", "structure: checkpoint has trailing bytes");
+    // A damaged file: NaN in the state went out in READY's interface state, and t = inf passed every time check.
+    if (!std::isfinite(s.t) || !std::isfinite(s.external_work) || !s.u.allFinite() || !s.v.allFinite() || !s.a.allFinite())
+        throw protocol::SolverError("bad_config", "structure: the checkpoint holds a time, load work, displacement, velocity "
+                                                  "or acceleration that is not a finite number; the file is damaged");
     return s;
 }
 

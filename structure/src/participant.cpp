@@ -40,7 +40,15 @@ InitReply StructureSolver::init(const InitRequest& request) {
         throw SolverError("bad_config", e.what());
     }
     dynamics_ = std::make_unique<FrameDynamics>(std::move(config), request.t0);
-    if (!request.state.empty()) dynamics_->state() = decode_state(request.state, dynamics_->model());
+    if (!request.state.empty()) {
+        dynamics_->state() = decode_state(request.state, dynamics_->model());
+        // INIT's t0 is the coordinator's checkpoint time, the state carries its own: one instant, or the first
+        // FRAME and ADVANCE would disagree about where the run is.
+        if (!protocol::same_instant(dynamics_->state().t, request.t0, 0.0))
+            throw SolverError("bad_config", "structure: the checkpoint's state is at t = " +
+                                                protocol::seconds(dynamics_->state().t) + ", but INIT resumes at t0 = " +
+                                                protocol::seconds(request.t0));
+    }
     interface_ = std::make_unique<InterfaceMap>(dynamics_->model(), dynamics_->config());
     saved_.reset();
     dt_wanted_ = std::min(dynamics_->config().time.dt_max, dynamics_->dt_accuracy());

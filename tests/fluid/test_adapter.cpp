@@ -3,7 +3,9 @@
 // vertices conserving total force and moment to round-off).
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <random>
@@ -186,6 +188,7 @@ TEST_SUITE("adapter") {
                 SphSolver resumed;
                 sphfsi::protocol::InitRequest req;
                 req.config = config;
+                req.t0 = 0.015;  // as the coordinator resumes: at its checkpoint's time
                 req.state = bytes;
                 resumed.init(req);
                 CHECK(resumed.simulation().time() == 0.015);
@@ -198,10 +201,11 @@ TEST_SUITE("adapter") {
         const Value config = small_dam_break("wcsph");
         auto s = start(config);
         step(*s, 0.005);
-        auto message_of = [&](std::vector<std::uint8_t> bytes) -> std::string {
+        auto message_of = [&](std::vector<std::uint8_t> bytes, double t0 = 0.005) -> std::string {
             SphSolver resumed;
             sphfsi::protocol::InitRequest req;
             req.config = config;
+            req.t0 = t0;
             req.state = std::move(bytes);
             try {
                 resumed.init(req);
@@ -222,6 +226,72 @@ TEST_SUITE("adapter") {
         CHECK(message_of({1, 2, 3}).find("bad_config: checkpoint: truncated") == 0);
         std::vector<std::uint8_t> cut(bytes.begin(), bytes.end() - 1);
         CHECK(message_of(cut).find("bad_config: checkpoint: truncated") == 0);
+        // INIT's t0 and the state's own time must be one instant (the state had been taken as it came, and the
+        // first FRAME then reported INIT's time while the fluid was at its own).
+        CHECK(message_of(bytes, 0.5).find("bad_config: checkpoint: its state is at t = 0.005") == 0);
+    }
+
+    // The header's counts matching the scene is not enough: a damaged array had been accepted with READY and
+    // crashed the first step (one entry short: an invalid free; an id of 1e9: a write past the snapshot's
+    // arrays) or was recorded as it came (a kind 9, NaN positions; a review, 2026-11-27). Each is refused.
+    TEST_CASE("a checkpoint whose particle arrays are damaged is refused, never run") {
+        const Value config = small_dam_break("wcsph");
+        auto s = start(config);
+        step(*s, 0.005);
+        const auto bytes = s->checkpoint();
+        const std::size_t n = s->simulation().particles().size();
+        // The layout of Simulation2D::write_state after the adapter's magic and empty start displacement (16
+        // bytes): magic, n, fluid, solid (4 x 8), t, step, rates flag (1), four maxima, escaped (5 x 8), then
+        // each array as its length (8) and entries: x (16 each), v (16), rho (8), id (4), tag (4), kind (1), ...
+        const std::size_t x_at = 16 + 32 + 16 + 1 + 40;
+        const std::size_t rho_at = x_at + 8 + 16 * n + 8 + 16 * n;
+        const std::size_t id_at = rho_at + 8 + 8 * n;
+        const std::size_t kind_at = id_at + 8 + 4 * n + 8 + 4 * n;
+        auto message_of = [&](std::vector<std::uint8_t> b) -> std::string {
+            SphSolver resumed;
+            sphfsi::protocol::InitRequest req;
+            req.config = config;
+            req.t0 = 0.005;
+            req.state = std::move(b);
+            try {
+                resumed.init(req);
+            } catch (const sphfsi::protocol::SolverError& e) {
+                return e.code() + ": " + e.what();
+            }
+            return "accepted";
+        };
+        REQUIRE(message_of(bytes) == "accepted");
+        std::uint64_t length = 0;
+        std::memcpy(&length, bytes.data() + x_at, 8);
+        REQUIRE(length == n);  // the layout above is the one written
+        auto with_bytes = [&](std::size_t at, const void* value, std::size_t size) {
+            std::vector<std::uint8_t> b = bytes;
+            std::memcpy(b.data() + at, value, size);
+            return b;
+        };
+        // Positions one entry short: the length says n - 1 and the last 16 bytes of the array go.
+        std::vector<std::uint8_t> short_x = bytes;
+        const std::uint64_t fewer = n - 1;
+        std::memcpy(short_x.data() + x_at, &fewer, 8);
+        short_x.erase(short_x.begin() + static_cast<std::ptrdiff_t>(x_at + 8 + 16 * fewer),
+                      short_x.begin() + static_cast<std::ptrdiff_t>(x_at + 8 + 16 * n));
+        CHECK(message_of(short_x).rfind("bad_config: checkpoint: position has " + std::to_string(n - 1) + " entries for " +
+                                        std::to_string(n) + " particles", 0) == 0);
+        const std::int32_t far_id = 1000000000, repeated_id = 1;
+        CHECK(message_of(with_bytes(id_at + 8, &far_id, 4)).find("the particle ids are not 0 to") != std::string::npos);
+        CHECK(message_of(with_bytes(id_at + 8, &repeated_id, 4)).find("the particle ids are not 0 to") != std::string::npos);
+        const std::int8_t kind = 9;
+        CHECK(message_of(with_bytes(kind_at + 8, &kind, 1)).find("a particle has kind 9") != std::string::npos);
+        const auto& kinds = s->simulation().particles().kind;  // in the order the checkpoint holds them
+        const auto first_fluid = static_cast<std::size_t>(
+            std::find(kinds.begin(), kinds.end(), sphfsi::fluid::Kind::Fluid) - kinds.begin());
+        const std::int8_t wall = 1;  // a fluid particle made a wall: the counts no longer match
+        CHECK(message_of(with_bytes(kind_at + 8 + first_fluid, &wall, 1)).find("do not match its counts") != std::string::npos);
+        const double nan = std::numeric_limits<double>::quiet_NaN();
+        CHECK(message_of(with_bytes(x_at + 8, &nan, 8)).find("position of entry 0 is not a finite number") != std::string::npos);
+        CHECK(message_of(with_bytes(rho_at + 8, &nan, 8)).find("density of entry 0 is not a finite number") != std::string::npos);
+        const double inf = std::numeric_limits<double>::infinity();
+        CHECK(message_of(with_bytes(16 + 32, &inf, 8)).find("its time is not a finite number") != std::string::npos);
     }
 
     // A checkpoint holds the interface state of its mesh. Resumed with another mesh that happens to make as
@@ -239,7 +309,8 @@ TEST_SUITE("adapter") {
         } catch (const sphfsi::protocol::SolverError& e) {
             what = e.code() + ": " + e.what();
         }
-        CHECK(what.rfind("bad_config: checkpoint: its interface state has 10 vertices, this INIT's mesh 27", 0) == 0);
+        CHECK(what.rfind("bad_config: checkpoint: its interface window's start displacement has 10 vertices, this INIT's "
+                         "mesh 27", 0) == 0);
     }
 
     // A structure that starts deflected (INIT interface_state) clears the water where it starts, as an

@@ -745,12 +745,11 @@ class Participant:
             ok = False
         if not ok:
             raise bad("INIT state is not a %s checkpoint of this program" % STATE_FORMAT)
+        if abs(s["core"]["t"] - t0) > 1e-9 * abs(t0):  # docs/protocol.md, INIT: one instant, or refused
+            raise bad("INIT t0 = %.17g but the checkpoint is at t = %.17g" % (t0, s["core"]["t"]))
         plate.set_core(s["core"])
         plate.saved = s["saved"]
         self.progress = s["progress"]
-        if plate.t != t0:
-            log("INIT t0 = %.17g but the checkpoint is at t = %.17g; resuming at the checkpoint's time"
-                % (t0, plate.t))
         if s.get("params") != {k: v for k, v in plate.p.items()}:
             log("warning: the configuration differs from the one the checkpoint was written with")
 

@@ -58,3 +58,15 @@ TEST_CASE("check_window refuses a start that is not finite, or a length that is 
     CHECK(verdict(nan, 1e-3, 0.0) == "bad_message");
     CHECK(verdict(inf, 1e-3, 0.0) == "bad_message");
 }
+
+TEST_CASE("a solver whose clock is not finite accepts no window, and no time is the same instant as infinity") {
+    // |t - inf| <= 1e-9 x inf held for every finite t: a structure resumed from a state at t = inf accepted
+    // every ADVANCE and its run completed (a review, 2026-11-27).
+    const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+    CHECK(verdict(0.0, 1e-3, inf) == "bad_state");
+    CHECK(verdict(0.0, 1e-3, nan) == "bad_state");
+    CHECK_FALSE(same_instant(0.5, inf, 1e-3));
+    CHECK_FALSE(same_instant(inf, inf, 1e-3));
+    CHECK_FALSE(same_instant(nan, 0.5, 1e-3));
+    CHECK(same_instant(0.5, 0.5, 0.0));
+}

@@ -2,7 +2,11 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <cstring>
 #include <functional>
+#include <limits>
+#include <string>
+#include <vector>
 
 #include "scenes.hpp"
 #include "sphfsi/structure/participant.hpp"
@@ -12,9 +16,10 @@ using namespace sphfsi::structure;
 using namespace sphfsi::protocol;
 
 namespace {
-InitRequest request(const Value& scene, std::vector<std::uint8_t> state = {}) {
+InitRequest request(const Value& scene, std::vector<std::uint8_t> state = {}, double t0 = 0.0) {
     InitRequest r;
     r.config = scene;
+    r.t0 = t0;
     r.state = std::move(state);
     return r;
 }
@@ -148,7 +153,7 @@ TEST_CASE("checkpoint -> init(state) resumes bit-identically") {
         const auto blob = a.checkpoint();
 
         StructureSolver b;
-        b.init(request(scene, blob));
+        b.init(request(scene, blob, t));  // as the coordinator resumes: at its checkpoint's time
         for (int k = 0; k < 5; ++k) {
             const AdvanceReply ra = a.advance(window(t, 1e-3, 2, forces(a, 60.0 - k)), p);
             const AdvanceReply rb = b.advance(window(t, 1e-3, 2, forces(b, 60.0 - k)), p);
@@ -165,8 +170,40 @@ TEST_CASE("checkpoint -> init(state) resumes bit-identically") {
         Value other = scene;
         set(other.as_table_mut()["members"].as_array_mut()[0], "n_elements", Value(11));
         StructureSolver c;
-        CHECK(code_of([&] { c.init(request(other, blob)); }) == "bad_config");
+        CHECK(code_of([&] { c.init(request(other, blob, t)); }) == "bad_config");
     }
+}
+
+// A damaged state: a NaN had gone out in READY's interface state, t = inf passed every later time check (the
+// run completed), and a state at another time than INIT's t0 made the first FRAME and ADVANCE disagree about
+// where the run was (a review, 2026-11-27). Layout (checkpoint.cpp): the 25-byte tag, dofs, elements,
+// fingerprint, t, step, external work (8 bytes each), then u, v, a.
+TEST_CASE("a damaged or mistimed checkpoint is refused") {
+    Value scene = coupled_scene("linear");
+    StructureSolver a;
+    a.init(request(scene));
+    Progress p;
+    const double t = a.advance(window(0.0, 1e-3, 2, forces(a, 40.0)), p).t;
+    const auto blob = a.checkpoint();
+    auto message_of = [&](std::vector<std::uint8_t> bytes, double t0) -> std::string {
+        StructureSolver b;
+        try {
+            b.init(request(scene, std::move(bytes), t0));
+        } catch (const SolverError& e) {
+            return e.code() + ": " + e.what();
+        }
+        return "accepted";
+    };
+    REQUIRE(message_of(blob, t) == "accepted");
+    CHECK(message_of(blob, 0.5).rfind("bad_config: structure: the checkpoint's state is at t = ", 0) == 0);
+    const std::size_t t_at = 25 + 24, u_at = t_at + 24;
+    for (const double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()})
+        for (const std::size_t at : {t_at, t_at + 16, u_at, u_at + 8}) {
+            CAPTURE(at);
+            std::vector<std::uint8_t> damaged = blob;
+            std::memcpy(damaged.data() + at, &bad, sizeof bad);
+            CHECK(message_of(damaged, t).find("not a finite number; the file is damaged") != std::string::npos);
+        }
 }
 
 TEST_CASE("snapshot fields") {
