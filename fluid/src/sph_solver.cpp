@@ -288,6 +288,7 @@ protocol::AdvanceReply SphSolver::advance(const protocol::AdvanceRequest& reques
     require_init();
     const double t = sim_->time();
     protocol::check_window(request, t, "fluid");
+    if (step_floor_failure_) throw *step_floor_failure_;
     if (coupling_) {
         try {
             coupling_->begin_window(t, request.dt, find_f64(request.inputs, "displacement"),
@@ -304,7 +305,7 @@ protocol::AdvanceReply SphSolver::advance(const protocol::AdvanceRequest& reques
     if (coupling_)
         reply.outputs["force"] = InterfaceCoupling::map_forces(coupling_->weights(), sim_->mean_solid_forces(),
                                                                coupling_->vertex_count());
-    reply.dt_wanted = sim_->stable_dt();
+    reply.dt_wanted = next_step_wanted();
     if (coupling_) coupling_->end_window();
     Value::Table stats;
     stats["steps"] = Value(static_cast<std::int64_t>(ws.steps));
@@ -336,6 +337,20 @@ std::optional<std::vector<std::string>> SphSolver::advance_inputs() const {
     return std::vector<std::string>{};
 }
 
+// The step the fluid wants after a window, for its reply. A stable step below the floor is the next step's
+// failure, not this window's: the window is whole, so it is answered asking for the floor (and recorded with its
+// frame), and the next ADVANCE raises the diagnostic before it steps, whatever its sub-steps. Thrown here, it
+// had discarded the finished window and the frame at its end (a review, 2026-11-27).
+double SphSolver::next_step_wanted() {
+    try {
+        return sim_->stable_dt();
+    } catch (const SolverError& e) {
+        if (e.code() != "diverged") throw;
+        step_floor_failure_ = e;
+        return settings_.dt_min;
+    }
+}
+
 void SphSolver::save() {
     require_init();
     sim_->save();
@@ -345,6 +360,7 @@ void SphSolver::save() {
 void SphSolver::restore() {
     require_init();
     sim_->restore();
+    step_floor_failure_.reset();  // it was the repeated window's end state's
     if (coupling_) coupling_->set_state(saved_coupling_);
 }
 

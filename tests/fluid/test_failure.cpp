@@ -74,6 +74,34 @@ TEST_SUITE("failure") {
         CHECK(msg.find("m/s (particle ") != std::string::npos);  // the particles that set the limits are named
     }
 
+    TEST_CASE("a step floor reached at a window's end fails the next window, not the finished one") {
+        // Windows of one step each, of the step the last reply asked for (the thesis's windows), so the floor
+        // is reached at a window's end. That window is whole: it is answered (the coordinator records it and
+        // its frame), and the next ADVANCE stops before its first step. The reply had thrown instead, and the
+        // frame at the window's end was lost (a review, 2026-11-27).
+        auto s = start(with(wcsph(dam_break(0.1 / 16)), {{"time.dt_min", 1.8e-4}}));
+        sphfsi::protocol::Progress progress;
+        bool failed = false;
+        double dt = s->simulation().stable_dt();
+        for (int k = 0; k < 1000 && !failed; ++k) {
+            sphfsi::protocol::AdvanceRequest req;
+            req.t = s->simulation().time();
+            req.dt = dt;
+            req.substeps = 1;
+            const auto steps_before = s->simulation().step_count();
+            try {
+                dt = s->advance(req, progress).dt_wanted;
+                CHECK(dt >= 1.8e-4);
+            } catch (const sphfsi::protocol::SolverError& e) {
+                failed = true;
+                CHECK(std::string(e.what()).find("below the floor") != std::string::npos);
+                CHECK(s->simulation().step_count() == steps_before);  // no step of the failing window was taken
+                CHECK(s->simulation().time() == req.t);
+            }
+        }
+        CHECK(failed);
+    }
+
     TEST_CASE("a density bound is enforced") {
         // Standard SPH with a very soft equation of state compresses far beyond 1 %.
         const std::string msg = diverge(with(wcsph(dam_break(0.1 / 16)), {{"pressure.model", "standard"},

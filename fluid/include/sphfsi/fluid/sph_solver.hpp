@@ -30,6 +30,7 @@ public:
 
 private:
     void require_init() const;
+    double next_step_wanted();
     FluidSettings settings_;
     std::unique_ptr<Simulation2D> sim_;
     std::optional<InterfaceCoupling> coupling_;
@@ -37,6 +38,8 @@ private:
     // The interface displacement (n x 2, row-major) the run started from; empty: undeformed. Checkpointed, so
     // a resume clears the water around the structure where the first start did.
     std::vector<double> start_displacement_;
+    // A step below the floor found at a window's end, raised by the next ADVANCE (next_step_wanted).
+    std::optional<protocol::SolverError> step_floor_failure_;
 };
 
 }  // namespace sphfsi::fluid
