@@ -145,9 +145,17 @@ double Simulation2D::check_state() {
     if (g.walls_x && x[0] > g.width + g.thickness) fail(i, "x", x[0], "beyond the outer face of the right wall at x = " + fmt(g.width + g.thickness) + " m, at y = " + fmt(x[1]) + " m: lost through the wall");
     if (g.floor && x[1] < -g.thickness) fail(i, "y", x[1], "below the outer face of the floor at y = " + fmt(-g.thickness) + " m: lost through the wall");
     if (g.lid && x[1] > g.height + g.thickness) fail(i, "y", x[1], "above the outer face of the lid at y = " + fmt(g.height + g.thickness) + " m: lost through the wall");
+    const std::string at = "at (" + fmt(x[0]) + ", " + fmt(x[1]) + ") m";
     if (section_.on() && section_.lost(x))
-        fail(i, "position", x[0], "inside " + section_.name() + ", deeper below its faces than a wall's rule allows: lost through it (y = " + fmt(x[1]) + " m)");
-    fail(i, "position", x[0], "inside an obstacle, deeper than its wall layers: lost through the wall (y = " + fmt(x[1]) + " m)");
+        fail(i, "x", x[0], at + ", inside " + section_.name() + ", deeper than the wall layers (" + fmt(g.thickness) +
+                               " m) below every face the water can touch, or across a thin part within dp/2 of its middle: "
+                               "lost through it");
+    for (const Box& b : g.obstacles)
+        if (through_obstacle(b, x))
+            fail(i, "x", x[0], at + ", inside the obstacle x in [" + fmt(b.x0) + ", " + fmt(b.x0 + b.width) + "], y in [" +
+                                   fmt(b.y0) + ", " + fmt(b.y0 + b.height) + "] m, deeper than its wall layers (at most " +
+                                   fmt(g.thickness) + " m) below every face the water can touch: lost through it");
+    fail(i, "x", x[0], at + ": lost through a wall");  // not reached: broken(i) held for one of the above
 }
 
 Simulation2D::Crossing Simulation2D::wall_crossings() const {

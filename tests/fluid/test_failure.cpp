@@ -200,13 +200,13 @@ TEST_SUITE("failure") {
         };
         // A plate two spacings thin (thinner than its three wall layers): the centres land past its middle.
         std::string msg = thrown(tank(0.01, 0.0), 0.0173205);
-        CHECK(msg.find("inside an obstacle") != std::string::npos);
+        CHECK(msg.find("inside the obstacle x in [0.03, 0.04], y in [0, 0.04] m") != std::string::npos);  // which one
         // A wide block on the floor, the water landing in its lowest wall-layer depth.
         msg = thrown(tank(0.04, 0.0), 0.0212);
-        CHECK(msg.find("inside an obstacle") != std::string::npos);
+        CHECK(msg.find("inside the obstacle x in [0.03, 0.07]") != std::string::npos);
         // The same at mid-height, which was caught before too.
         msg = thrown(tank(0.04, 0.015), 0.0212);
-        CHECK(msg.find("inside an obstacle") != std::string::npos);
+        CHECK(msg.find("inside the obstacle x in [0.03, 0.07]") != std::string::npos);
     }
 
     TEST_CASE("a particle thrown into the gate or a coupled structure stops the run, naming the solid") {
