@@ -112,14 +112,13 @@ Recorder::Recorder(std::filesystem::path file, const RunMetadata& meta, std::opt
     flush();
 }
 
-bool Recorder::take_over_when_caught_up(double t) {
-    if (resuming_.empty() || t < history_end_ * (1 - 1e-12)) return false;
+void Recorder::take_over_when_caught_up(double t) {
+    if (resuming_.empty() || t < history_end_ * (1 - 1e-12)) return;
     flush();
     std::filesystem::rename(resuming_, file_);  // the open handle follows the file: it is the same inode
     resuming_.clear();
     for (const auto& [role, times] : frame_times_)
         if (series_.count("/frames/" + role + "/position")) write_xdmf(role);
-    return true;
 }
 
 void Recorder::abandon_resume() {

@@ -97,10 +97,11 @@ private:
         bool checkpoint;  // a checkpoint is taken there
     };
     Stop next_stop() const;
-    // A resume's copies replace record.h5 and watchpoints.csv once the run has reached the time the interrupted
-    // record ends at: until then those hold more than the copies, and a resume that stops must leave them.
-    void take_over_when_caught_up() {
-        if (recorder_->take_over_when_caught_up(t_) && watchpoints_) watchpoints_->take_over();
+    // A resume's copies replace record.h5 and watchpoints.csv, each once the run has reached the time that file
+    // ends at: until then it holds more than its copy, and a resume that stops must leave it.
+    void take_over_when_caught_up(double t) {
+        recorder_->take_over_when_caught_up(t);
+        if (watchpoints_) watchpoints_->take_over_when_caught_up(t);
     }
     void record_window(const WindowPlan& plan, const WindowOutcome& o, double wall_s, const InterfaceWork& work);
     void snapshot_all();
@@ -205,7 +206,7 @@ int Runner::execute() {
     int code = 0;
     try {
         initialise(resume);
-        take_over_when_caught_up();
+        take_over_when_caught_up(t_);
         loop();
     } catch (const ParticipantFailure& e) {
         log(std::string("error: ") + e.what());
@@ -238,15 +239,20 @@ int Runner::execute() {
     recorder_->set_status(status);
     recorder_->flush();
     if (watchpoints_) watchpoints_->flush();
-    if (code == 0) {  // a completed resume replaces the interrupted record whatever time that record reached
-        if (recorder_->take_over_when_caught_up(std::numeric_limits<double>::infinity()) && watchpoints_)
-            watchpoints_->take_over();
-    } else if (recorder_->resume_pending()) {
-        log("the resumed run stopped at t = " + std::to_string(t_) + " s, before t = " +
-            std::to_string(recorder_->history_end()) + " s, where the interrupted run's record ends: " +
-            recorder_->file().filename().string() + " and watchpoints.csv are left as that run left them");
-        recorder_->abandon_resume();
-        if (watchpoints_) watchpoints_->abandon_resume();
+    if (code == 0) {  // a completed resume replaces the interrupted files whatever time they reached
+        take_over_when_caught_up(std::numeric_limits<double>::infinity());
+    } else {
+        if (recorder_->resume_pending()) {
+            log("the resumed run stopped at t = " + std::to_string(t_) + " s, before t = " +
+                std::to_string(recorder_->history_end()) + " s, where the interrupted run's record ends: " +
+                recorder_->file().filename().string() + " is left as that run left it");
+            recorder_->abandon_resume();
+        }
+        if (watchpoints_ && watchpoints_->resume_pending()) {
+            log("the resumed run stopped before t = " + std::to_string(watchpoints_->history_end()) +
+                " s, where the interrupted run's watchpoints.csv ends: it is left as that run left it");
+            watchpoints_->abandon_resume();
+        }
     }
     if (code == 0) log("done: t = " + std::to_string(t_) + " s, " + std::to_string(windows_) + " windows; record in " +
                        recorder_->file().string());
@@ -395,12 +401,15 @@ WindowPlan Runner::plan_window(double t_stop) const {
 // (whose fluid force had been 25 times its neighbours'): a frame due a sliver before the end is taken at the end,
 // and a checkpoint due within a sliver of a frame, or of the end, is taken with that frame, or not at all (a
 // resume needs none at the end). Frames keep their times. A sliver is a quarter of the window the coupling
-// rule wants, or of the participant's own step when it runs alone (its window is then the whole gap).
+// rule wants, or of the participant's own step when it runs alone (its window is then the whole gap), or of the
+// output or checkpoint interval where that is shorter: windows are no longer than those anyway, and a larger
+// sliver would fold several frames due before the end into the end's one.
 Runner::Stop Runner::next_stop() const {
     const double frame_due = std::min(output_index_ * output_dt_, end_);
     const double checkpoint_due = (checkpoint_index_ + 1) * checkpoint_dt_;
-    const double sliver = 0.25 * (coupled_ ? plan_window(std::min(frame_due, checkpoint_due)).wanted
-                                           : (fluid_ ? fluid_dt_ : structure_dt_));
+    const double window = coupled_ ? plan_window(std::min(frame_due, checkpoint_due)).wanted
+                                   : (fluid_ ? fluid_dt_ : structure_dt_);
+    const double sliver = 0.25 * std::min({window, output_dt_, checkpoint_dt_});
     const double frame = end_ - frame_due < sliver ? end_ : frame_due;
     if (checkpoint_due >= end_ - sliver) return {frame, false};
     if (std::abs(checkpoint_due - frame) < sliver) return {frame, true};
@@ -455,7 +464,7 @@ void Runner::loop() {
         // Frames at k * output_interval, and the end's state whether or not end_time is one of those.
         if (t_ >= output_index_ * output_dt_ - eps || t_ >= end_ - eps) snapshot_all();
         if (stop.checkpoint && t_ == t_stop) checkpoint();
-        take_over_when_caught_up();
+        take_over_when_caught_up(t_);
     }
 }
 

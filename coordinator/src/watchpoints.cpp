@@ -45,20 +45,21 @@ Watchpoints::Watchpoints(const std::filesystem::path& file, const Value& scene, 
     }
     // A resume keeps the rows up to the checkpoint: whole rows only (a kill can cut the last one short), in
     // time order up to the first one beyond it. They go to FILE.resuming, which takes the resumed rows and
-    // replaces the file when the record's copy replaces record.h5 (take_over): a resume stopped before then
-    // leaves both as the interrupted run left them.
+    // replaces the file once the run has passed the file's last row (take_over_when_caught_up): a resume stopped
+    // before then leaves it as the interrupted run left it.
     std::ifstream in(file);
     std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     std::string kept = header;
     std::size_t at = text.find('\n');
+    bool keeping = true;
     for (std::size_t end; at != std::string::npos && (end = text.find('\n', at + 1)) != std::string::npos; at = end) {
         const std::string line = text.substr(at + 1, end - at - 1);
         char* stop = nullptr;
         const double t = std::strtod(line.c_str(), &stop);
-        if (std::count(line.begin(), line.end(), ',') != 5 || stop == line.c_str() || *stop != ',' ||
-            !(t <= resume_t * (1 + 1e-12)))
-            break;
-        kept += line + "\n";
+        if (std::count(line.begin(), line.end(), ',') != 5 || stop == line.c_str() || *stop != ',') break;
+        if (t > history_end_) history_end_ = t;  // the file is replaced only once the run is past its last row
+        keeping = keeping && t <= resume_t * (1 + 1e-12);
+        if (keeping) kept += line + "\n";
     }
     resuming_ = file;
     resuming_ += ".resuming";
@@ -67,8 +68,8 @@ Watchpoints::Watchpoints(const std::filesystem::path& file, const Value& scene, 
     flush();
 }
 
-void Watchpoints::take_over() {
-    if (resuming_.empty()) return;
+void Watchpoints::take_over_when_caught_up(double t) {
+    if (resuming_.empty() || t < history_end_ * (1 - 1e-12)) return;
     flush();
     std::filesystem::rename(resuming_, file_);  // the open stream follows the file: it is the same inode
     resuming_.clear();

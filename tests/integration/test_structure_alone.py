@@ -139,10 +139,13 @@ def test_frames_keep_their_times_and_no_window_passes_the_end():
     frame onto a checkpoint's time: before a review on 2026-11-27, an output time a sliver past the end pulled
     the last window there (beam_only to 0.05 s every 0.0101 s ended at 0.0505 s, "completed", with no frame at
     0.05 s), and checkpoints every 0.0101 s moved the frames due every 0.01 s onto them. A structure alone
-    counts slivers in its own steps (here about 1e-3 s), so 1e-4 s apart are two stops."""
+    counts slivers in its own steps (a quarter of its 1.7e-4 s here), so 1e-4 s apart are two stops; and in the
+    output interval where that is shorter: frames every 2e-5 s to 1 ms are 51, none folded into the end's (a
+    review of the first version found 49)."""
     scene = os.path.join(harness.ROOT, "scenarios", "beam_only.toml")
     cases = ((["run.output_interval=0.0101"], [0.0, 0.0101, 0.0202, 0.0303, 0.0404, 0.05]),
              (["run.output_interval=0.01", "run.checkpoint_interval=0.0101"], [0.0, 0.01, 0.02, 0.03, 0.04, 0.05]))
+    cases += ((["run.end_time=0.001", "run.output_interval=2e-5"], [k * 2e-5 for k in range(51)]),)
     for settings, frames in cases:
         out = harness.out_dir("stops")
         harness.sphfsi("run", scene, "--out", out, "--quiet", "--set", "run.end_time=0.05",
@@ -151,7 +154,7 @@ def test_frames_keep_their_times_and_no_window_passes_the_end():
             times = list(f["frames/structure/time"][:])
             assert f.attrs["status"] == "completed", f.attrs["status"]
             assert len(times) == len(frames) and all(abs(a - b) < 1e-12 for a, b in zip(times, frames)), (settings, times)
-            assert max(f["windows/t"][:]) <= 0.05 * (1 + 1e-12), (settings, f["windows/t"][-3:])
+            assert max(f["windows/t"][:]) <= frames[-1] * (1 + 1e-12), (settings, f["windows/t"][-3:])
 
 
 if __name__ == "__main__":

@@ -53,9 +53,9 @@ public:
     Recorder(std::filesystem::path file, const RunMetadata& meta, std::optional<double> resume_at = std::nullopt);
     ~Recorder();
 
-    // A resume's copy replaces `file` when `t` has reached the time the interrupted record ends at; true if it
-    // did so now (the XDMF sidecar is written then: until then it describes the interrupted record).
-    bool take_over_when_caught_up(double t);
+    // A resume's copy replaces `file` when `t` has reached the time the interrupted record ends at (the XDMF
+    // sidecar is written then: until then it describes the interrupted record).
+    void take_over_when_caught_up(double t);
     bool resume_pending() const { return !resuming_.empty(); }
     double history_end() const { return history_end_; }
     // Removes a resume's copy that has not replaced `file`, which stays as the interrupted run left it.

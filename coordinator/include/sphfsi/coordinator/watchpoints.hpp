@@ -14,14 +14,18 @@ namespace sphfsi::coordinator {
 class Watchpoints {
 public:
     // `append`: continue an existing file (resume), dropping rows after `resume_t`, in FILE.resuming until
-    // take_over() replaces the file with it (when the record's copy replaces record.h5).
+    // take_over_when_caught_up() replaces the file with it.
     Watchpoints(const std::filesystem::path& file, const Value& scene, const protocol::InterfaceMesh& mesh,
                 bool append, double resume_t);
     void write(double t, const protocol::F64Array& displacement);
     bool empty() const { return points_.empty(); }
     // Throws std::runtime_error if any row since the last flush could not be written (a full disk).
     void flush();
-    void take_over();
+    // A resume's FILE.resuming replaces the file once `t` has reached the last time the file holds (its rows
+    // run ahead of the record's, which is flushed at frames only).
+    void take_over_when_caught_up(double t);
+    bool resume_pending() const { return !resuming_.empty(); }
+    double history_end() const { return history_end_; }
     // Removes a resume's FILE.resuming that has not replaced the file, which stays as it was.
     void abandon_resume();
 
@@ -34,6 +38,7 @@ private:
     std::vector<Point> points_;
     std::filesystem::path file_;
     std::filesystem::path resuming_;  // a resume's rows while they have not replaced file_
+    double history_end_ = 0.0;        // the last time of a whole row in the interrupted file
     std::ofstream out_;
 };
 
