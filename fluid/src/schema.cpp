@@ -273,8 +273,7 @@ TableSchema build() {
         .fallback("none");
 
     TableSchema& obstacle = s.table_array("obstacle", "static solid boxes inside the tank, filled with wall particles; water deeper inside "
-                                                         "one than its wall layers reach stops the run, except across a side no thicker than dp, "
-                                                         "which only boundary.repulsive guards (fluid.wall_crossings counts centres inside)");
+                                                         "one than its wall layers reach, or whose step crosses its middle, stops the run");
     obstacle.number("x0", "left edge").unit("m").required();
     obstacle.number("y0", "bottom edge").unit("m").required();
     obstacle.number("width", "width").unit("m").greater_than(0).required();

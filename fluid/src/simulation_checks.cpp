@@ -54,9 +54,9 @@ void Simulation2D::mark_escaped() {
 // it, like a particle beyond a tank wall's outer face. Each axis has its own depth: along a side thinner than
 // two wall layers, no centre gets that deep, so there it is within half a spacing of the box's middle, and at
 // least half a spacing past the face (a step moves a particle a small fraction of a spacing, so one passing
-// through lands in that band; without the repulsive force centres sit up to 0.43 dp past a surface, and a
-// side no thicker than dp is not checked). A face on a tank wall is not one the water can touch: a box
-// standing on the floor counts from its others.
+// through lands in that band; without the repulsive force centres sit up to 0.43 dp past a surface). A side
+// no thicker than dp has no such band: across_obstacle_middle catches water through it. A face on a tank wall
+// is not one the water can touch: a box standing on the floor counts from its others.
 bool Simulation2D::through_obstacle(const Box& b, const V& x) const {
     const auto& g = geometry_;
     const double tol = 1e-9 * std::max(g.width, g.height);
@@ -71,6 +71,33 @@ bool Simulation2D::through_obstacle(const Box& b, const V& x) const {
     const bool inside_x = x[0] > x_lo && x[0] < x_hi && x[0] > -g.thickness && x[0] < g.width + g.thickness;
     const bool inside_y = x[1] > y_lo && x[1] < y_hi && x[1] > -g.thickness && x[1] < g.height + g.thickness;
     return inside_x && inside_y;
+}
+
+// A step whose path crosses a box's middle line more than dp/2 inside the box's other two faces (or anywhere
+// along a side against a tank wall): the particle is past the middle from whichever face it came through, where
+// the box's own wall particles sit. Water is never there, so this stops nothing the depth rule lets through on
+// a thick box, and it catches water through a side no thicker than dp, which has no depth band at all (a
+// review, 2026-11-27). The path is the step's: from x - dt v to x (exact for symplectic Euler, within
+// dt^2 |a| / 2 for the other integrators, a small fraction of dp).
+bool Simulation2D::across_obstacle_middle(const Box& b, const V& from, const V& to) const {
+    const auto& g = geometry_;
+    const double tol = 1e-9 * std::max(g.width, g.height), inf = std::numeric_limits<double>::infinity();
+    const double lo[2] = {b.x0, b.y0}, size[2] = {b.width, b.height};
+    // Where the water can reach along each axis: dp/2 inside a face it can touch, the wall itself beyond an
+    // open side (the tank's own checks take over there).
+    const double reach_lo[2] = {g.walls_x && b.x0 <= tol ? -inf : b.x0 + 0.5 * s_.dp,
+                                g.floor && b.y0 <= tol ? -inf : b.y0 + 0.5 * s_.dp};
+    const double reach_hi[2] = {g.walls_x && b.x0 + b.width >= g.width - tol ? inf : b.x0 + b.width - 0.5 * s_.dp,
+                                g.lid && b.y0 + b.height >= g.height - tol ? inf : b.y0 + b.height - 0.5 * s_.dp};
+    for (int axis = 0; axis < 2; ++axis) {
+        const double middle = lo[axis] + 0.5 * size[axis];
+        const double a = from[axis] - middle, c = to[axis] - middle;
+        if ((a < 0.0) == (c < 0.0)) continue;
+        const int other = 1 - axis;
+        const double at = from[other] + a / (a - c) * (to[other] - from[other]);  // where the path crosses it
+        if (at > reach_lo[other] && at < reach_hi[other]) return true;
+    }
+    return false;
 }
 
 bool Simulation2D::density_in_bounds(double rho) const {
@@ -101,7 +128,7 @@ void Simulation2D::check_summed_densities() const {
     fail_density(worst);
 }
 
-double Simulation2D::check_state() {
+double Simulation2D::check_state(double dt) {
     mark_escaped();
     if (section_.on()) section_.place(st_.t);
     const auto& P = st_.P;
@@ -119,7 +146,7 @@ double Simulation2D::check_state() {
         if (g.floor && x[1] < -g.thickness) return true;
         if (g.lid && x[1] > g.height + g.thickness) return true;
         for (const Box& b : g.obstacles)
-            if (through_obstacle(b, x)) return true;
+            if (through_obstacle(b, x) || across_obstacle_middle(b, x - dt * P.v[i], x)) return true;
         return section_.on() && section_.lost(x);
     };
 #pragma omp parallel for schedule(static) reduction(|| : bad) reduction(max : rho_max)
@@ -150,11 +177,15 @@ double Simulation2D::check_state() {
         fail(i, "x", x[0], at + ", inside " + section_.name() + ", deeper than the wall layers (" + fmt(g.thickness) +
                                " m) below every face the water can touch, or across a thin part within dp/2 of its middle: "
                                "lost through it");
-    for (const Box& b : g.obstacles)
+    for (const Box& b : g.obstacles) {
+        const std::string box = "the obstacle x in [" + fmt(b.x0) + ", " + fmt(b.x0 + b.width) + "], y in [" + fmt(b.y0) +
+                                ", " + fmt(b.y0 + b.height) + "] m";
         if (through_obstacle(b, x))
-            fail(i, "x", x[0], at + ", inside the obstacle x in [" + fmt(b.x0) + ", " + fmt(b.x0 + b.width) + "], y in [" +
-                                   fmt(b.y0) + ", " + fmt(b.y0 + b.height) + "] m, deeper than its wall layers (at most " +
-                                   fmt(g.thickness) + " m) below every face the water can touch: lost through it");
+            fail(i, "x", x[0], at + ", inside " + box + ", deeper than its wall layers (at most " + fmt(g.thickness) +
+                                   " m) below every face the water can touch: lost through it");
+        if (across_obstacle_middle(b, x - dt * P.v[i], x))
+            fail(i, "x", x[0], at + ": its step crossed the middle of " + box + ": lost through it");
+    }
     fail(i, "x", x[0], at + ": lost through a wall");  // not reached: broken(i) held for one of the above
 }
 

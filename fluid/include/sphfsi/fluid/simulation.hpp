@@ -161,7 +161,7 @@ private:
     static constexpr double pcisph_reach = 0.25, pcisph_step_reach = 0.2;
     void accumulate_solid_forces(double weight);
     void wrap_periodic();
-    double check_state();  // throws on a broken fluid particle; returns the largest fluid density
+    double check_state(double dt);  // throws on a broken fluid particle (dt: the step just taken); returns the largest fluid density
     // Summed densities are only known at the next evaluation: their bounds are checked there, so that a
     // bad one is named with the step and time of the positions it was summed at.
     void check_summed_densities() const;
@@ -170,6 +170,7 @@ private:
     void mark_escaped();
     bool over_the_wall(const V& x) const;  // beyond a side wall of an open tank, having gone over it
     bool through_obstacle(const Box& b, const V& x) const;  // lost into a static obstacle
+    bool across_obstacle_middle(const Box& b, const V& from, const V& to) const;  // lost across a thin one
     [[noreturn]] void fail(std::size_t i, const std::string& quantity, double value, const std::string& why) const;
     // Inside a step once its integrator has moved the time on, the state belongs to the step not yet counted.
     bool stepping_ = false;
