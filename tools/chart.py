@@ -202,7 +202,10 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
     ax.set_xlabel(axis_label(x, desc))
     ax.set_ylabel(axis_label(y, desc))
     ttl = title or desc.get("title") or "error against cost"
-    counts = f"{len(all_pts)} plotted, {len(failed)} did not complete, {len(no_value)} no value, " \
+    # Completed runs without a value on the cost axis (a structure alone has no particle_steps) are not failures.
+    no_cost = sum(1 for _, _, r in failed if r.get("status") == "no cost")
+    counts = f"{len(all_pts)} plotted, {len(failed) - no_cost} did not complete, " \
+             + (f"{no_cost} completed without a {x}, " if no_cost else "") + f"{len(no_value)} no value, " \
              f"{len(no_error)} without error" + (f", {not_applicable} not applicable" if not_applicable else "")
     ax.set_title(f"{ttl}\n{y} against {x} ({counts})", fontsize=10)
     ax.grid(True, which="both", alpha=0.25)
@@ -213,7 +216,8 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
     fig.savefig(prefix + ".png", dpi=150)
     fig.savefig(prefix + ".svg")
     plt.close(fig)
-    return {"plotted": len(all_pts), "series": len([l for l in labels if groups.get(l)]), "failed": len(failed),
+    return {"plotted": len(all_pts), "series": len([l for l in labels if groups.get(l)]), "failed": len(failed) - no_cost,
+            "no_cost": no_cost,
             "no_value": len(no_value), "no_error": len(no_error), "not_applicable": not_applicable,
             "pareto": [(p[2], p[0], p[1], p[3].get("run", "")) for p in front]}
 
@@ -253,7 +257,8 @@ def chart_file(csv_path, x, y, series, prefix, title=None, annotate=None, where=
     if series is None:
         series = default_series(rows, desc)
     s = make_chart(rows, x, y, series, prefix, title, annotate, desc)
-    return (f"{s['plotted']} runs in {s['series']} series, {s['failed']} did not complete, {s['no_value']} no value, "
+    return (f"{s['plotted']} runs in {s['series']} series, {s['failed']} did not complete, "
+            + (f"{s['no_cost']} completed without a {x}, " if s['no_cost'] else "") + f"{s['no_value']} no value, "
             f"{s['no_error']} without error, {s['not_applicable']} not applicable, Pareto front {len(s['pareto'])}")
 
 
@@ -329,7 +334,8 @@ def main(argv=None):
         print(f"chart: {err}", file=sys.stderr)
         return 2
     print(f"wrote {args.out}.png and {args.out}.svg: {s['plotted']} runs in {s['series']} series, "
-          f"{s['failed']} did not complete, {s['no_error']} without error")
+          f"{s['failed']} did not complete, " + (f"{s['no_cost']} completed without a {args.x}, " if s['no_cost'] else "")
+          + f"{s['no_error']} without error")
     print(f"Pareto front ({args.x} -> {args.y}):")
     for label, cx, cy, run in s["pareto"]:
         print(f"  {cx:12.5g} {cy:12.5g}  {label}  {run}")

@@ -549,7 +549,7 @@ def surge_front(run_dir, params, context):
     Z = (x_front - x0) / a with a the initial column width and x0 the back wall, T = t sqrt(2 g / a)
     (Martin & Moyce's T = n t sqrt(g / a) with n^2 = 2); time is never shifted or scaled otherwise.
     Z_sim is linearly interpolated between frames at each reference T <= T_max; the frames must reach
-    T_max. Record often enough: output_interval <= 0.1 sqrt(a / (2 g)) is Delta T <= 0.1 between frames,
+    the last of those points (T = 2.32 for T_max = 2.5). Record often enough: output_interval <= 0.1 sqrt(a / (2 g)) is Delta T <= 0.1 between frames,
     over which the front moves less than the data's own resolution (0.22 a, fronts timed at 0.5 in marks).
         mean_rel = mean |Z_sim - Z_exp| / Z_exp,  max_rel = max |Z_sim - Z_exp| / Z_exp
     Reference: Martin, J. C. & Moyce, W. J. (1952), Phil. Trans. R. Soc. A 244, 312-324, tables 2 and 6,

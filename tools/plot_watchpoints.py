@@ -7,19 +7,24 @@ usage: /usr/bin/python3 tools/plot_watchpoints.py RUN/watchpoints.csv [OUT.png] 
 e.g. scenarios/reference/antoci2007_gate_tip_dx.csv) on the named watchpoint's component.
 """
 import csv
+import os
 import sys
 from collections import defaultdict
 
 import matplotlib
 
 matplotlib.use("Agg")  # files only; no display needed
-import matplotlib.pyplot as plt
+import matplotlib.pyplot as plt  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from metrics import read_reference_curve  # noqa: E402
 
 
 def read_reference(path):
-    with open(path) as f:
-        rows = list(csv.reader(line for line in f if not line.startswith("#")))
-    return [float(r[0]) for r in rows[1:]], [float(r[1]) for r in rows[1:]]
+    """The reference's times and values, read as the sweeps' metrics read them (a header line is optional;
+    reading the first data row as one had dropped it)."""
+    t, v = read_reference_curve(path)
+    return list(t), list(v)
 
 
 def main():

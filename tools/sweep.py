@@ -100,6 +100,7 @@ class Sweeper:
                 parts.append(path)
         self.build_stamp = "; ".join(parts)
         self.reused_other_build = False
+        self.reused_other_threads = False
         self.metric_columns = []
         self.metric_errors = []
         for m in sw.metrics:
@@ -125,6 +126,8 @@ class Sweeper:
             return None
         if reusing and data.get("build") != self.build_stamp:
             self.reused_other_build = True
+        if reusing and data.get("threads") != self.threads:  # its wall and CPU times are of another thread count
+            self.reused_other_threads = True
         return data["row"]
 
     def timeout_of(self, run):
@@ -516,6 +519,9 @@ def main(argv=None):
     write_description(sweeper, started)
     if sweeper.reused_other_build:
         print("sweep: note: some kept results were made by another build of sphfsi than this one", file=sys.stderr)
+    if sweeper.reused_other_threads:
+        print(f"sweep: note: some kept results ran with another thread count than this sweep's {sweeper.threads}: "
+              "their wall and CPU times do not compare with the others", file=sys.stderr)
     counts = {}
     for r in selected:
         if r.id in rows_by_id:

@@ -45,9 +45,14 @@ def main():
         sys.exit(__doc__)
     refs = {name: read_reference_curve(os.path.join(ROOT, "scenarios", "reference", f))
             for name, f in REFERENCES.items()}
-    runs = sorted(glob.glob(os.path.join(sys.argv[1], "runs", "dp=*")), key=lambda d: -float(d.split("=")[1].split("-")[0]))
+    # The sweep's completed runs only: a failed or timed-out run, or a folder a different sweep file left,
+    # would be read to its last row and held there (np.interp clamps).
+    with open(os.path.join(sys.argv[1], "results.csv")) as f:
+        completed = {r["run"] for r in csv.DictReader(f) if r["status"] == "completed"}
+    runs = sorted((d for d in glob.glob(os.path.join(sys.argv[1], "runs", "dp=*")) if os.path.basename(d) in completed),
+                  key=lambda d: -float(os.path.basename(d).split("=")[1].split("-")[0]))
     if not runs:
-        sys.exit(f"no runs dp=* under {sys.argv[1]}/runs")
+        sys.exit(f"no completed runs dp=* in {sys.argv[1]}/results.csv")
     grid = np.arange(0.0, RUN_END + 1e-9, 0.005)
     columns = {"t": grid}
     fig, ax = plt.subplots(figsize=(8, 4))
@@ -56,6 +61,8 @@ def main():
     for run in runs:
         label = os.path.basename(run).split("-")[0]
         t, u = corner(run)
+        if t[-1] < RUN_END * (1 - 1e-9):
+            sys.exit(f"{run}: the corner's record ends at t = {t[-1]:g} s, before {RUN_END} s")
         k = int(np.argmax(u))
         cells = [f"{rms_of_peak(t, u, td, ud, IMPACT_END):.3f}, {rms_of_peak(t, u, td, ud, RUN_END):.3f}"
                  for td, ud in refs.values()]

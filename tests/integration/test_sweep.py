@@ -14,6 +14,7 @@ import re
 import subprocess
 import sys
 import time
+import tomllib
 
 import harness
 
@@ -286,6 +287,24 @@ def test_print_expect_keeps_each_expectations_own_tolerances():
                              [], "today")
     assert '"a.rel" = { value = 2e-12, atol = ' + specs.toml_value(1e-9) + ' }' in text, text
     assert '"b.frac" = { value = 0.5, two_sided = true }' in text and '"c.n" = 5' in text, text
+    # A grid run's table names it by its settings and by having no case: a [[case]] with the same settings
+    # (here a failing one) matched it too, so the pasted tables failed --check at once (a review, 2026-11-27).
+    grid_run, case_run = specs.Run({}, {"k": 1}), specs.Run({}, {"k": 1}, case="starved")
+    text = guard.expect_toml([grid_run], {grid_run.id: {"status": "completed", "a.rel": 1e-3}}, ["a.rel"], "today")
+    where = tomllib.loads(text)["expect"][0]["where"]
+    assert specs.matches(grid_run, where) and not specs.matches(case_run, where), text
+
+
+def test_a_formula_that_is_not_a_real_number_is_named():
+    """A negative base to a fractional power is complex in Python: float() of it had raised a TypeError that
+    no caller expected (a traceback from metrics.py; a review, 2026-11-27)."""
+    from sweeplib import formula
+    assert formula.evaluate("P**(1/3)", {"P": 8.0}) == 2.0
+    try:
+        formula.evaluate("P**(1/3)", {"P": -8.0})
+        raise AssertionError("a complex value was accepted")
+    except formula.FormulaError as err:
+        assert "is not a real number" in str(err), err
 
 
 FAKE_COORDINATOR = r'''

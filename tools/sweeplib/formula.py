@@ -72,7 +72,10 @@ def evaluate(expr, constants=None, bound=None):
             for kind, f in ops.items():
                 if isinstance(node.op, kind):
                     try:
-                        return float(f())
+                        value = f()
+                        if isinstance(value, complex):  # a negative number to a fractional power
+                            raise FormulaError(f"in {text!r}: {a!r} ** {b!r} is not a real number")
+                        return float(value)
                     except (ZeroDivisionError, OverflowError) as err:
                         raise FormulaError(f"in {text!r}: {err}") from None
         if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in FUNCTIONS \
