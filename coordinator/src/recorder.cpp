@@ -104,29 +104,26 @@ Recorder::Recorder(std::filesystem::path file, const RunMetadata& meta, std::opt
         throw std::runtime_error(interrupted.string() + " is left from a resume that did not finish and may hold history that " +
                                  file_.string() + " lacks: keep the file you want as " + file_.filename().string() +
                                  ", remove the other, and resume again");
-    resuming_ = file_;
-    resuming_ += ".resuming";
-    h5_ = h5::create_file(resuming_.string());
+    resuming_.begin(file_);
+    h5_ = h5::create_file(resuming_.path().string());
     copy_history(file_, *resume_at);
     set_status("running (resumed)");
     flush();
 }
 
 void Recorder::take_over_when_caught_up(double t) {
-    if (resuming_.empty() || t < history_end_ * (1 - 1e-12)) return;
+    if (!resuming_.caught_up(t)) return;
     flush();
-    std::filesystem::rename(resuming_, file_);  // the open handle follows the file: it is the same inode
-    resuming_.clear();
+    resuming_.replace(file_);
     for (const auto& [role, times] : frame_times_)
         if (series_.count("/frames/" + role + "/position")) write_xdmf(role);
 }
 
 void Recorder::abandon_resume() {
-    if (resuming_.empty()) return;
+    if (!resuming_.pending()) return;
     series_.clear();  // the datasets first: HDF5 keeps a file open while any of its objects is
     h5_.reset();
-    std::filesystem::remove(resuming_);
-    resuming_.clear();
+    resuming_.abandon();
 }
 
 // Copies the interrupted run's record up to time `until`: the scene, participants and root attributes
@@ -146,7 +143,7 @@ void Recorder::copy_history(const std::filesystem::path& old_file, double until)
         if (!h5::exists(src.get(), time_path)) return 0;
         std::vector<double> t = read_all(time_path);
         for (double x : t)  // the largest, not the last: a kill can leave a row extended but unwritten (0)
-            if (x > history_end_) history_end_ = x;
+            resuming_.holds(x);
         hsize_t keep = 0;
         while (keep < t.size() && t[keep] <= until * (1 + 1e-12)) ++keep;
         return keep;
@@ -351,7 +348,7 @@ void Recorder::flush() {
 
 // XDMF 3 sidecar: a temporal collection of point clouds read straight from the HDF5 datasets.
 void Recorder::write_xdmf(const std::string& role) {
-    if (!resuming_.empty()) return;  // record.h5 is still the interrupted run's, which its sidecar describes
+    if (resuming_.pending()) return;  // record.h5 is still the interrupted run's, which its sidecar describes
     const std::string group = "/frames/" + role + "/";
     const auto& pos = series_.at(group + "position");
     const hsize_t n = pos.row_shape().empty() ? 0 : pos.row_shape()[0];

@@ -18,4 +18,19 @@ void replace_file(const std::filesystem::path& file, std::string_view bytes, std
     std::filesystem::rename(tmp, file);
 }
 
+void ResumeCopy::begin(const std::filesystem::path& file) {
+    copy_ = file;
+    copy_ += ".resuming";
+}
+
+void ResumeCopy::replace(const std::filesystem::path& file) {
+    std::filesystem::rename(copy_, file);
+    copy_.clear();
+}
+
+void ResumeCopy::abandon() {
+    std::filesystem::remove(copy_);
+    copy_.clear();
+}
+
 }  // namespace sphfsi::coordinator

@@ -57,29 +57,26 @@ Watchpoints::Watchpoints(const std::filesystem::path& file, const Value& scene, 
         char* stop = nullptr;
         const double t = std::strtod(line.c_str(), &stop);
         if (std::count(line.begin(), line.end(), ',') != 5 || stop == line.c_str() || *stop != ',') break;
-        if (t > history_end_) history_end_ = t;  // the file is replaced only once the run is past its last row
+        resuming_.holds(t);  // the file is replaced only once the run is past its last row
         keeping = keeping && t <= resume_t * (1 + 1e-12);
         if (keeping) kept += line + "\n";
     }
-    resuming_ = file;
-    resuming_ += ".resuming";
-    replace_file(resuming_, kept, "watchpoints");
-    out_.open(resuming_, std::ios::app);
+    resuming_.begin(file);
+    replace_file(resuming_.path(), kept, "watchpoints");
+    out_.open(resuming_.path(), std::ios::app);
     flush();
 }
 
 void Watchpoints::take_over_when_caught_up(double t) {
-    if (resuming_.empty() || t < history_end_ * (1 - 1e-12)) return;
+    if (!resuming_.caught_up(t)) return;
     flush();
-    std::filesystem::rename(resuming_, file_);  // the open stream follows the file: it is the same inode
-    resuming_.clear();
+    resuming_.replace(file_);
 }
 
 void Watchpoints::abandon_resume() {
-    if (resuming_.empty()) return;
+    if (!resuming_.pending()) return;
     out_.close();
-    std::filesystem::remove(resuming_);
-    resuming_.clear();
+    resuming_.abandon();
 }
 
 void Watchpoints::write(double t, const protocol::F64Array& displacement) {
@@ -94,7 +91,7 @@ void Watchpoints::write(double t, const protocol::F64Array& displacement) {
 void Watchpoints::flush() {
     if (!out_.is_open()) return;  // an abandoned resume's rows, removed
     out_.flush();
-    if (!out_) throw std::runtime_error("cannot write " + (resuming_.empty() ? file_ : resuming_).string() + " (is the disk full?)");
+    if (!out_) throw std::runtime_error("cannot write " + (resuming_.pending() ? resuming_.path() : file_).string() + " (is the disk full?)");
 }
 
 }  // namespace sphfsi::coordinator

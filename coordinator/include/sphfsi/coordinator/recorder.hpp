@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "sphfsi/coordinator/h5.hpp"
+#include "sphfsi/coordinator/replace_file.hpp"
 #include "sphfsi/protocol/arrays.hpp"
 #include "sphfsi/protocol/value.hpp"
 
@@ -56,8 +57,8 @@ public:
     // A resume's copy replaces `file` when `t` has reached the time the interrupted record ends at (the XDMF
     // sidecar is written then: until then it describes the interrupted record).
     void take_over_when_caught_up(double t);
-    bool resume_pending() const { return !resuming_.empty(); }
-    double history_end() const { return history_end_; }
+    bool resume_pending() const { return resuming_.pending(); }
+    double history_end() const { return resuming_.end(); }
     // Removes a resume's copy that has not replaced `file`, which stays as the interrupted run left it.
     void abandon_resume();
 
@@ -90,8 +91,7 @@ private:
     h5::Series& series(const std::string& path, const std::vector<hsize_t>& row_shape, bool is_int, hsize_t chunk_rows);
 
     std::filesystem::path file_;
-    std::filesystem::path resuming_;  // a resume's copy while it has not replaced file_
-    double history_end_ = 0.0;        // the last time the interrupted record holds (a window or a frame)
+    ResumeCopy resuming_;  // a resume's copy while it has not replaced file_; its end: the record's last time
     h5::Handle h5_;
     std::map<std::string, h5::Series> series_;
     std::vector<std::string> window_columns_;

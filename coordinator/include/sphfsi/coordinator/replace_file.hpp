@@ -9,4 +9,23 @@ namespace sphfsi::coordinator {
 // Throws std::runtime_error "cannot write WHAT FILE.tmp" if the bytes could not all be written.
 void replace_file(const std::filesystem::path& file, std::string_view bytes, std::string_view what);
 
+// A resume's copy of an interrupted run's file (FILE.resuming), which takes the resumed run and replaces FILE
+// only once the run has passed the last time FILE holds: until then FILE holds more than the copy, and a
+// resume that stops must leave it as it was (Recorder, Watchpoints).
+class ResumeCopy {
+public:
+    void begin(const std::filesystem::path& file);  // FILE.resuming from now on
+    void holds(double t) { if (t > end_) end_ = t; }  // FILE holds time t (NaN is ignored)
+    bool pending() const { return !copy_.empty(); }
+    const std::filesystem::path& path() const { return copy_; }
+    double end() const { return end_; }
+    bool caught_up(double t) const { return pending() && t >= end_ * (1 - 1e-12); }
+    void replace(const std::filesystem::path& file);  // renames the copy over FILE; an open handle follows it
+    void abandon();                                    // removes the copy, FILE stays
+
+private:
+    std::filesystem::path copy_;
+    double end_ = 0.0;
+};
+
 }  // namespace sphfsi::coordinator

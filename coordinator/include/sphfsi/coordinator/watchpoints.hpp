@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "sphfsi/coordinator/replace_file.hpp"
 #include "sphfsi/protocol/mapping.hpp"
 #include "sphfsi/protocol/value.hpp"
 
@@ -24,8 +25,8 @@ public:
     // A resume's FILE.resuming replaces the file once `t` has reached the last time the file holds (its rows
     // run ahead of the record's, which is flushed at frames only).
     void take_over_when_caught_up(double t);
-    bool resume_pending() const { return !resuming_.empty(); }
-    double history_end() const { return history_end_; }
+    bool resume_pending() const { return resuming_.pending(); }
+    double history_end() const { return resuming_.end(); }
     // Removes a resume's FILE.resuming that has not replaced the file, which stays as it was.
     void abandon_resume();
 
@@ -37,8 +38,7 @@ private:
     };
     std::vector<Point> points_;
     std::filesystem::path file_;
-    std::filesystem::path resuming_;  // a resume's rows while they have not replaced file_
-    double history_end_ = 0.0;        // the last time of a whole row in the interrupted file
+    ResumeCopy resuming_;  // a resume's rows while they have not replaced file_; its end: the file's last row
     std::ofstream out_;
 };
 
