@@ -17,13 +17,16 @@ matplotlib.use("Agg")  # files only; no display needed
 import matplotlib.pyplot as plt  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from metrics import read_reference_curve  # noqa: E402
+from metrics import MetricError, read_reference_curve  # noqa: E402
 
 
 def read_reference(path):
     """The reference's times and values, read as the sweeps' metrics read them (a header line is optional;
     reading the first data row as one had dropped it)."""
-    t, v = read_reference_curve(path)
+    try:
+        t, v = read_reference_curve(path)
+    except MetricError as err:
+        sys.exit(f"plot_watchpoints: {err}")
     return list(t), list(v)
 
 

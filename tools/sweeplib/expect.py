@@ -72,7 +72,7 @@ def expect_toml(runs, rows_by_id, error_columns, when):
         if run.case:
             where = f'{{ case = "{run.case}" }}'
         else:  # case = "": a [[case]] with the same settings is not this run (it failed --check when pasted)
-            where = "{ case = \"\", " + ", ".join(f'"{k}" = {toml_value(v)}' for k, v in run.settings.items()) + " }"
+            where = "{ " + ", ".join(['case = ""'] + [f'"{k}" = {toml_value(v)}' for k, v in run.settings.items()]) + " }"
         out.append("")
         out.append("[[expect]]")
         out.append(f"where = {where}")
