@@ -84,6 +84,21 @@ std::unique_ptr<SphSolver> start_around(const Value& config, const InterfaceMesh
     return s;
 }
 
+// What a fluid resumed from `state` at t0 answers INIT: "accepted", or the refusal's "code: message".
+std::string resume_verdict(const Value& config, std::vector<std::uint8_t> state, double t0) {
+    SphSolver resumed;
+    sphfsi::protocol::InitRequest req;
+    req.config = config;
+    req.t0 = t0;
+    req.state = std::move(state);
+    try {
+        resumed.init(req);
+    } catch (const sphfsi::protocol::SolverError& e) {
+        return e.code() + ": " + e.what();
+    }
+    return "accepted";
+}
+
 // plate()'s window-end inputs after rising from rest at the constant acceleration that reaches vertical
 // velocity vy at the end of a window `window` long.
 Fields rising_plate(double vy, double window) {
@@ -201,18 +216,8 @@ TEST_SUITE("adapter") {
         const Value config = small_dam_break("wcsph");
         auto s = start(config);
         step(*s, 0.005);
-        auto message_of = [&](std::vector<std::uint8_t> bytes, double t0 = 0.005) -> std::string {
-            SphSolver resumed;
-            sphfsi::protocol::InitRequest req;
-            req.config = config;
-            req.t0 = t0;
-            req.state = std::move(bytes);
-            try {
-                resumed.init(req);
-            } catch (const sphfsi::protocol::SolverError& e) {
-                return e.code() + ": " + e.what();
-            }
-            return "accepted";
+        auto message_of = [&](std::vector<std::uint8_t> bytes, double t0 = 0.005) {
+            return resume_verdict(config, std::move(bytes), t0);
         };
         const auto bytes = s->checkpoint();
         CHECK(message_of(bytes) == "accepted");
@@ -247,19 +252,7 @@ TEST_SUITE("adapter") {
         const std::size_t rho_at = x_at + 8 + 16 * n + 8 + 16 * n;
         const std::size_t id_at = rho_at + 8 + 8 * n;
         const std::size_t kind_at = id_at + 8 + 4 * n + 8 + 4 * n;
-        auto message_of = [&](std::vector<std::uint8_t> b) -> std::string {
-            SphSolver resumed;
-            sphfsi::protocol::InitRequest req;
-            req.config = config;
-            req.t0 = 0.005;
-            req.state = std::move(b);
-            try {
-                resumed.init(req);
-            } catch (const sphfsi::protocol::SolverError& e) {
-                return e.code() + ": " + e.what();
-            }
-            return "accepted";
-        };
+        auto message_of = [&](std::vector<std::uint8_t> b) { return resume_verdict(config, std::move(b), 0.005); };
         REQUIRE(message_of(bytes) == "accepted");
         std::uint64_t length = 0;
         std::memcpy(&length, bytes.data() + x_at, 8);
