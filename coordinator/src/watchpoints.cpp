@@ -91,7 +91,9 @@ void Watchpoints::write(double t, const protocol::F64Array& displacement) {
 void Watchpoints::flush() {
     if (!out_.is_open()) return;  // an abandoned resume's rows, removed
     out_.flush();
-    if (!out_) throw std::runtime_error("cannot write " + (resuming_.pending() ? resuming_.path() : file_).string() + " (is the disk full?)");
+    if (!out_)
+        throw std::runtime_error("cannot write " + (resuming_.pending() ? resuming_.path() : file_).string() +
+                                 " (is the disk full?)");
 }
 
 }  // namespace sphfsi::coordinator
