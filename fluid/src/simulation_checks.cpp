@@ -130,7 +130,7 @@ void Simulation2D::check_summed_densities() const {
 
 double Simulation2D::check_state(double dt) {
     mark_escaped();
-    if (section_.on()) section_.place(st_.t);
+    if (section_.on()) section_.place(st_.t, dt);
     const auto& P = st_.P;
     const auto& g = geometry_;
     const double v_cap = s_.max_mach * c0_;  // 0: no reference speed (PCISPH without gravity or u_max)
@@ -147,7 +147,7 @@ double Simulation2D::check_state(double dt) {
         if (g.lid && x[1] > g.height + g.thickness) return true;
         for (const Box& b : g.obstacles)
             if (through_obstacle(b, x) || across_obstacle_middle(b, x - dt * P.v[i], x)) return true;
-        return section_.on() && section_.lost(x);
+        return section_.on() && (section_.lost(x) || section_.crossed_middle(x - dt * P.v[i], x));
     };
 #pragma omp parallel for schedule(static) reduction(|| : bad) reduction(max : rho_max)
     for (long long q = 0; q < n; ++q) {
@@ -177,6 +177,8 @@ double Simulation2D::check_state(double dt) {
         fail(i, "x", x[0], at + ", inside " + section_.name() + ", deeper than the wall layers (" + fmt(g.thickness) +
                                " m) below every face the water can touch, or across a thin part within dp/2 of its middle: "
                                "lost through it");
+    if (section_.on() && section_.crossed_middle(x - dt * P.v[i], x))
+        fail(i, "x", x[0], at + ": its step crossed the middle of " + section_.name() + " where it is one cell thick: lost through it");
     for (const Box& b : g.obstacles) {
         const std::string box = "the obstacle x in [" + fmt(b.x0) + ", " + fmt(b.x0 + b.width) + "], y in [" + fmt(b.y0) +
                                 ", " + fmt(b.y0 + b.height) + "] m";

@@ -54,11 +54,16 @@ SolidSection::SolidSection(std::string name, std::vector<Quad> cells, const std:
     };
     for (const Quad& c : cells_)
         for (std::size_t k = 0; k < 4; ++k) ++uses[edge(c, k)];
-    for (const Quad& c : cells_)
+    face_edges_.assign(cells_.size(), 0);
+    for (std::size_t i = 0; i < cells_.size(); ++i)
         for (std::size_t k = 0; k < 4; ++k) {
+            const Quad& c = cells_[i];
             const auto e = edge(c, k);
-            if (e.first != e.second && uses[e] == 1) faces_.push_back({c[k], c[(k + 1) % 4]});
+            if (e.first == e.second || uses[e] != 1) continue;
+            faces_.push_back({c[k], c[(k + 1) % 4]});
+            face_edges_[i] = static_cast<std::uint8_t>(face_edges_[i] | (1u << k));
         }
+    for (std::uint8_t f : face_edges_) any_middle_ = any_middle_ || (f & 0b0101) == 0b0101 || (f & 0b1010) == 0b1010;
 }
 
 template <class Box>
@@ -78,8 +83,10 @@ void SolidSection::fill(Bins& bins, std::size_t n, const Box& box_of) {
     for (std::size_t i = 0; i < n; ++i) each_bin(i, [&](std::size_t k) { bins.items[next[k]++] = static_cast<std::uint32_t>(i); });
 }
 
-void SolidSection::place(double t) {
+void SolidSection::place(double t, double dt) {
     vertices_(t, at_);
+    if (any_middle_ && dt > 0.0) vertices_(t - dt, before_);
+    else before_ = at_;
     lo_ = hi_ = at_.empty() ? Vec2{} : at_.front();
     for (const Vec2& v : at_)
         for (int k = 0; k < 2; ++k) {
@@ -203,6 +210,54 @@ bool SolidSection::surface_within(const Vec2& x, double tol) const {
 }
 
 bool SolidSection::past_surface(const Vec2& x, double tol) const { return inside(x) && !surface_within(x, tol); }
+
+bool SolidSection::crossed_middle(const Vec2& from, const Vec2& to) const {
+    if (!any_middle_ || nx_ == 0) return false;
+    // The cells binned around the path, grown by a bin: within a step a cell moves far less than a bin (a
+    // quarter of 2 L + dp). Written so that a non-finite position crosses nothing (check_state names it).
+    Vec2 lo{}, hi{};
+    for (int k = 0; k < 2; ++k) {
+        lo[k] = std::min(from[k], to[k]) - bin_;
+        hi[k] = std::max(from[k], to[k]) + bin_;
+        if (!(hi[k] >= lo_[k] && lo[k] <= hi_[k])) return false;
+    }
+    const auto b0 = bin_of(lo), b1 = bin_of(hi);
+    thread_local std::vector<std::uint32_t> near;
+    near.clear();
+    for (int y = b0[1]; y <= b1[1]; ++y)
+        for (int x = b0[0]; x <= b1[0]; ++x) {
+            const std::size_t k = static_cast<std::size_t>(y) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(x);
+            near.insert(near.end(), cell_bins_.items.begin() + cell_bins_.start[k], cell_bins_.items.begin() + cell_bins_.start[k + 1]);
+        }
+    std::sort(near.begin(), near.end());
+    near.erase(std::unique(near.begin(), near.end()), near.end());
+    for (std::uint32_t i : near) {
+        const Quad& c = cells_[i];
+        const unsigned faces = face_edges_[i];
+        auto mid = [&](const std::vector<Vec2>& v, unsigned e) {
+            return (v[static_cast<std::size_t>(c[e])] + v[static_cast<std::size_t>(c[(e + 1) % 4])]) * 0.5;
+        };
+        for (unsigned k = 0; k < 2; ++k) {
+            if (!(faces & (1u << k)) || !(faces & (1u << (k + 2)))) continue;
+            const unsigned ea = (k + 3) % 4, eb = k + 1;  // the middle line runs between these edges
+            const Vec2 a0 = mid(before_, ea), b0m = mid(before_, eb), a1 = mid(at_, ea), b1m = mid(at_, eb);
+            // Which side of the middle the centre is on at each end of the step, each against the middle then.
+            const double f0 = cross(b0m - a0, from - a0), f1 = cross(b1m - a1, to - a1);
+            if (!((f0 < 0.0 && f1 > 0.0) || (f0 > 0.0 && f1 < 0.0))) continue;
+            const double s = f0 / (f0 - f1);  // where along the step, the middle moving linearly with it
+            const Vec2 a = a0 + (a1 - a0) * s, e = b0m + (b1m - b0m) * s - a, p = from + (to - from) * s;
+            const double len = norm(e);
+            if (len == 0.0) continue;
+            const double along = dot(p - a, e) / len;
+            // Half a spacing's margin at an end that is a face the water can touch (a free end).
+            auto margin = [&](unsigned edge, const Vec2& at) {
+                return (faces & (1u << edge)) && (!touchable_ || touchable_(at)) ? 0.5 * dp_ : 0.0;
+            };
+            if (along >= margin(ea, a1) && along <= len - margin(eb, b1m)) return true;
+        }
+    }
+    return false;
+}
 
 bool SolidSection::lost(const Vec2& x) const {
     // A centre no deeper than dp/2 below a surface point is at a face whatever the thickness (the allowance

@@ -171,6 +171,58 @@ TEST_SUITE("solid_section") {
         CHECK_FALSE(s.lost(Vec2{{0.1 + 0.5 * b + 0.5 * dp, 0.5 * a - 0.4 * dp}}));
     }
 
+    TEST_CASE("a step across the middle of a part one cell thick is caught, at any thickness") {
+        // A plate one spacing thick, one cell through it, 0.1 m long: no centre gets deeper than dp/2, so
+        // only the step's path shows water going through (a review found the gap, 2026-11-27).
+        const double len = 0.1;
+        const auto s = section(rectangle(0.0, 0.0, len, dp, 40, 1));
+        auto step = [&](double x0, double y0, double x1, double y1) { return s.crossed_middle(Vec2{{x0, y0}}, Vec2{{x1, y1}}); };
+        CHECK(step(0.05, 0.6 * dp, 0.05, 0.4 * dp));        // down across the middle
+        CHECK(step(0.0251, 0.7 * dp, 0.0249, 0.3 * dp));    // across a cell boundary (0.025) as it crosses
+        CHECK_FALSE(step(0.05, 1.2 * dp, 0.05, 0.6 * dp));  // into the upper half only
+        CHECK_FALSE(step(0.02, 0.6 * dp, 0.08, 0.6 * dp));  // along it
+        // Round a free end: within dp/2 of it water turning the corner crosses the middle's line.
+        CHECK_FALSE(step(len - 0.4 * dp, 0.6 * dp, len - 0.4 * dp, 0.4 * dp));
+        CHECK(step(len - 0.6 * dp, 0.6 * dp, len - 0.6 * dp, 0.4 * dp));
+        CHECK_FALSE(step(len + 0.1 * dp, 0.6 * dp, len + 0.1 * dp, 0.4 * dp));
+        // An end the water cannot touch (set into a wall at x = 0) has no such margin.
+        const auto walled = section(rectangle(0.0, 0.0, len, dp, 40, 1), 0.0, [](const Vec2& p) { return p[0] > 1e-12; });
+        CHECK(walled.crossed_middle(Vec2{{0.2 * dp, 0.6 * dp}}, Vec2{{0.2 * dp, 0.4 * dp}}));
+        CHECK_FALSE(s.crossed_middle(Vec2{{0.2 * dp, 0.6 * dp}}, Vec2{{0.2 * dp, 0.4 * dp}}));
+        // The same plate 1.25 dp thick and half a spacing thick: the middle is the middle at any thickness.
+        for (double t : {1.25 * dp, 0.5 * dp}) {
+            const auto p = section(rectangle(0.0, 0.0, len, t, 40, 1));
+            CHECK(p.crossed_middle(Vec2{{0.05, 0.5 * t + 0.1 * dp}}, Vec2{{0.05, 0.5 * t - 0.1 * dp}}));
+            CHECK_FALSE(p.crossed_middle(Vec2{{0.05, 0.5 * t + 0.3 * dp}}, Vec2{{0.05, 0.5 * t + 0.1 * dp}}));
+        }
+        // Two cells through the thickness: no cell spans it, so no middle is checked (the depth rule is).
+        const auto rows = section(rectangle(0.0, 0.0, len, 2 * dp, 40, 2));
+        CHECK_FALSE(rows.crossed_middle(Vec2{{0.05, 1.1 * dp}}, Vec2{{0.05, 0.9 * dp}}));
+        // Non-finite positions cross nothing (check_state names them as such).
+        const double nan = std::numeric_limits<double>::quiet_NaN();
+        CHECK_FALSE(step(0.05, 0.6 * dp, nan, 0.4 * dp));
+    }
+
+    TEST_CASE("a single cell spans both ways, like a static box; a moving part is judged where it was") {
+        // The gate's section: one cell, 3 dp wide, 0.1 m high, its foot on the floor where no water is.
+        const double w = 3 * dp, h = 0.1;
+        auto gate = section(rectangle(0.02, 0.0, w, h, 1, 1), 0.0, [](const Vec2& p) { return p[1] > 1e-12; });
+        const double mid = 0.02 + 0.5 * w;
+        CHECK(gate.crossed_middle(Vec2{{mid - 0.1 * dp, 0.05}}, Vec2{{mid + 0.1 * dp, 0.05}}));  // through it
+        CHECK(gate.crossed_middle(Vec2{{mid - 0.1 * dp, 0.2 * dp}}, Vec2{{mid + 0.1 * dp, 0.2 * dp}}));  // at its foot
+        CHECK_FALSE(gate.crossed_middle(Vec2{{mid - 0.1 * dp, h - 0.2 * dp}}, Vec2{{mid + 0.1 * dp, h - 0.2 * dp}}));  // its top
+        CHECK(gate.crossed_middle(Vec2{{mid, 0.5 * h + 0.1 * dp}}, Vec2{{mid, 0.5 * h - 0.1 * dp}}));  // down its middle
+        // A plate one spacing thick rising at 1 m/s for a step of 0.2 dp / (1 m/s): its middle rises from 0.5 dp
+        // to 0.7 dp. Water standing at 0.6 dp has been swept through; water rising with it has not.
+        const double dt = 0.2 * dp;
+        auto rising = section(rectangle(0.0, 0.0, 0.1, dp, 40, 1), 1.0);
+        rising.place(dt, dt);
+        CHECK(rising.crossed_middle(Vec2{{0.05, 0.6 * dp}}, Vec2{{0.05, 0.6 * dp}}));
+        CHECK_FALSE(rising.crossed_middle(Vec2{{0.05, 0.6 * dp}}, Vec2{{0.05, 0.8 * dp}}));
+        rising.place(dt);  // placed without the step: the middle where it is now, both ends of the step
+        CHECK_FALSE(rising.crossed_middle(Vec2{{0.05, 0.6 * dp}}, Vec2{{0.05, 0.6 * dp}}));
+    }
+
     TEST_CASE("far-flung vertices and non-finite centres are handled, not undefined") {
         Mesh m = rectangle(0.0, 0.0, 0.1, 10 * dp, 10, 1);
         m.vertices.push_back(Vec2{{1e8, 1e8}});  // no cell uses it; it only stretches the bounding box

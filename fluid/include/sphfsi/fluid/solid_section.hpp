@@ -11,10 +11,10 @@
 // it is at no face: deeper than L below every face, or, across a section thinner than 2 L + dp, within dp/2
 // of the middle and more than dp/2 past the face (a step moves a particle a small fraction of a spacing, so
 // one passing through lands in that band; without the repulsive force centres sit up to 0.43 dp past a
-// surface). A section no thicker than dp is never checked across. For a box inside the tank this is
-// through_obstacle (a review compared 160,000 points in 400 boxes of 1 - 25 cells); unlike it, the section
-// ends at the tank's wall surfaces (a centre squeezing under a gate standing on the floor, through the
-// floor's own layers, is caught only below them, by the floor's check).
+// surface). A section no thicker than dp has no such band (crossed_middle, below, covers it). For a box
+// inside the tank this is through_obstacle (a review compared 160,000 points in 400 boxes of 1 - 25 cells);
+// unlike it, the section ends at the tank's wall surfaces (a centre squeezing under a gate standing on the
+// floor, through the floor's own layers, is caught only below them, by the floor's check).
 //
 // Why these choices (reviews of a first version, reverted, and of this one found each of them wrong there):
 // - Faces are the edges no two cells share, found by the vertices' reference positions, so a mesh of several
@@ -30,6 +30,15 @@
 //   may run from inside a wall out into the water.
 // - Cells and faces are binned on a grid a quarter of 2 L + dp wide, rebuilt at every placement: a particle
 //   tests the cells of its own bin, and only a centre inside the section looks at faces, within 2 L + dp.
+//
+// A part no thicker than dp has no depth band, so the rule above cannot see water through it. As for the
+// static obstacles (Simulation2D::across_obstacle_middle), the step's path shows it: a cell whose two
+// opposite edges are both faces spans the part's thickness, and the line joining the midpoints of its other
+// two edges is the part's middle there; a step whose path (x - dt v at t - dt to x at t, against the middle
+// where it was at each of those times) crosses it has gone from one face past the middle, where the part's
+// own solid particles sit. Within dp/2 of an end of the line that is a face the water can touch (a free
+// end) it is not counted: water turning round the end crosses there. A part meshed with several cells
+// through its thickness has no such cell; it is thick enough for the depth rule.
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -54,10 +63,13 @@ public:
 
     bool on() const { return static_cast<bool>(vertices_); }
     const std::string& name() const { return name_; }
-    // Moves the section to time t; lost() then answers for positions at that time.
-    void place(double t);
+    // Moves the section to time t; lost() then answers for positions at that time, and crossed_middle() for
+    // a step from t - dt to t.
+    void place(double t, double dt = 0.0);
     // Whether a fluid centre at x is deeper inside the section than the rule above allows.
     bool lost(const Vec2& x) const;
+    // Whether the step from `from` (at t - dt) to `to` (at t) crossed a thin part's middle (above).
+    bool crossed_middle(const Vec2& from, const Vec2& to) const;
     // Whether x is inside the section further than `tol` from every face the water can touch (the
     // validation's count of wall crossings, Simulation2D::wall_crossings).
     bool past_surface(const Vec2& x, double tol) const;
@@ -83,12 +95,16 @@ private:
     std::string name_;
     std::vector<Quad> cells_;
     std::vector<std::array<std::int32_t, 2>> faces_;  // vertex index pairs of the edges no two cells share
+    // Per cell, bit k: its edge k (vertex k to k + 1) is a face. A cell with edges k and k + 2 both faces
+    // spans the thickness across them (its middle line joins the midpoints of edges k + 1 and k + 3).
+    std::vector<std::uint8_t> face_edges_;
+    bool any_middle_ = false;  // some cell spans the thickness
     Vertices vertices_;
     Touchable touchable_;
     double layers_ = 0.0, dp_ = 0.0;
 
     // At the placed time:
-    std::vector<Vec2> at_;
+    std::vector<Vec2> at_, before_;  // the vertices at t and at t - dt
     std::vector<Face> placed_faces_;
     Vec2 lo_{}, hi_{};  // bounding box of the vertices
     double bin_ = 1.0;
