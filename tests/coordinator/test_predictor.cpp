@@ -1,11 +1,14 @@
 // The interface predictors (coordinator/src/coupling/explicit.cpp, docs/coupling.md): the displacement the
 // fluid is handed for the window's end, from the structure's state at its start. Reference: a motion of
 // constant acceleration, d(t) = d0 + v0 t + a t^2 / 2, sampled at the ends of two windows of different
-// lengths. "quadratic" (second order) must predict it exactly (tolerance 1e-12 relative: round-off), "linear"
-// (first order) misses by a dt^2 / 2 exactly; the first window, with no earlier one, falls back to linear.
+// lengths. "quadratic" (second order) must predict it exactly, displacement and velocity (tolerance 1e-12
+// relative: round-off), "linear" (first order) misses the displacement by a dt^2 / 2 exactly and hands over
+// the last velocity; the first window, with no earlier one, falls back to linear. Every pair handed over is
+// one the structure can answer with: d - d_n = dt (v_n + v) / 2 (a review found the quadratic one was not).
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <string>
 
 #include "sphfsi/coordinator/coupling.hpp"
 
@@ -32,12 +35,20 @@ InterfaceState state_at(double t, double dt_prev) {
     return s;
 }
 
-double predicted(const char* kind, const InterfaceState& s, double dt) {
+struct Prediction {
+    double d, v;
+};
+
+Prediction predicted(const char* kind, const InterfaceState& s, double dt) {
     F64Array d, v;
     predict(kind, s, dt, d, v);
-    CHECK(v(0, 0) == s.velocity(0, 0));  // the velocity handed over is the structure's last
-    return d(0, 0);
+    if (std::string(kind) != "none")  // "none" keeps d_n and v_n: the structure standing where it is
+        CHECK(d(0, 0) - s.displacement(0, 0) == doctest::Approx(0.5 * dt * (s.velocity(0, 0) + v(0, 0))).scale(0).epsilon(1e-12));
+    return {d(0, 0), v(0, 0)};
 }
+
+// Relative, unlike doctest's default Approx, which adds 1 to the scale (an absolute 1e-12 here).
+doctest::Approx near(double x, double rel) { return doctest::Approx(x).scale(0).epsilon(rel); }
 
 }  // namespace
 
@@ -49,14 +60,19 @@ TEST_SUITE("predictor") {
                 CAPTURE(dt_prev);
                 CAPTURE(dt);
                 const InterfaceState s = state_at(t, dt_prev);
-                CHECK(predicted("quadratic", s, dt) == doctest::Approx(position(t + dt)).epsilon(1e-12));
-                CHECK(position(t + dt) - predicted("linear", s, dt) == doctest::Approx(0.5 * a * dt * dt).epsilon(1e-6));
-                CHECK(predicted("none", s, dt) == position(t));
+                const Prediction q = predicted("quadratic", s, dt), l = predicted("linear", s, dt), n = predicted("none", s, dt);
+                CHECK(q.d == near(position(t + dt), 1e-12));
+                CHECK(q.v == near(velocity(t + dt), 1e-12));
+                CHECK(position(t + dt) - l.d == near(0.5 * a * dt * dt, 1e-6));
+                CHECK(l.v == s.velocity(0, 0));
+                CHECK(n.d == position(t));
+                CHECK(n.v == s.velocity(0, 0));
             }
     }
 
     TEST_CASE("the first window has no earlier one: quadratic falls back to linear") {
         const InterfaceState s = state_at(0.0, 0.0);
-        CHECK(predicted("quadratic", s, 1e-3) == predicted("linear", s, 1e-3));
+        CHECK(predicted("quadratic", s, 1e-3).d == predicted("linear", s, 1e-3).d);
+        CHECK(predicted("quadratic", s, 1e-3).v == predicted("linear", s, 1e-3).v);
     }
 }

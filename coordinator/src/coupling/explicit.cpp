@@ -19,10 +19,17 @@ void predict(const std::string& kind, const InterfaceState& s, double dt, F64Arr
     // a = (v_n - vbar) / (dt_prev / 2). Exact for a constant acceleration whatever the two windows' lengths.
     // (Until 2026-11-27 vbar stood in for v_{n-1} in Piperno's form: a dt^2 / 4 off under a constant
     // acceleration, first order like the linear predictor.)
+    // The velocity is predicted with the same acceleration, v_n + dt a, so that the pair is one the structure
+    // can answer with (d - d_n = dt (v_n + v) / 2, as for the linear predictor's d_n + dt v_n with v_n): the
+    // fluid's solids then move as their velocities say, and an implicit scheme's first iterate is consistent,
+    // which relaxation keeps (x + w r mixes it with the structure's answers). Until 2026-11-27 the velocity
+    // stayed v_n: a review found the displacement-only residual then dominated by that mismatch, and Aitken
+    // diverging on a model problem.
     for (std::size_t i = 0; i < d.values.size(); ++i) {
         const double v_mean = (s.displacement.values[i] - s.previous_displacement.values[i]) / s.previous_dt;
         const double a = (s.velocity.values[i] - v_mean) / (0.5 * s.previous_dt);
         d.values[i] += dt * s.velocity.values[i] + 0.5 * dt * dt * a;
+        v.values[i] += dt * a;
     }
 }
 
