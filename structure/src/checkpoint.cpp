@@ -13,7 +13,10 @@ static_assert(std::endian::native == std::endian::little, "checkpoint layout ass
 
 namespace {
 
-constexpr std::string_view magic = "sphfsi-structure-state-v1";
+constexpr std::string_view magic = "sphfsi-structure-state-v2";
+// Version 1 (before 2026-11-27) had no energy scale; it is read with the scale restarted from the resumed
+// state's own energies (FrameDynamics::check_energy raises it at the first step).
+constexpr std::string_view magic_v1 = "sphfsi-structure-state-v1";
 
 // Changes whenever nodes or connectivity change, so a checkpoint cannot resume a different mesh.
 double fingerprint(const Model& model) {
@@ -62,6 +65,7 @@ std::vector<std::uint8_t> encode_state(const State& s, const Model& model) {
     w.put<double>(s.t);
     w.put<std::uint64_t>(s.step);
     w.put<double>(s.external_work);
+    w.put<double>(s.energy_scale);
     for (const Vector* x : {&s.u, &s.v, &s.a}) w.raw(x->data(), sizeof(double) * x->size());
     return w.out;
 }
@@ -70,7 +74,9 @@ State decode_state(const std::vector<std::uint8_t>& bytes, const Model& model) {
     Reader r{bytes};
     std::string head(magic.size(), '\0');
     r.raw(head.data(), head.size());
-    if (head != magic) throw protocol::SolverError("bad_config", "structure: the resume state is not a structure checkpoint");
+    static_assert(magic.size() == magic_v1.size());
+    const bool v1 = head == magic_v1;
+    if (head != magic && !v1) throw protocol::SolverError("bad_config", "structure: the resume state is not a structure checkpoint");
     const auto dofs = r.get<std::uint64_t>(), elements = r.get<std::uint64_t>();
     const double print = r.get<double>();
     auto other_mesh = [](const std::string& what) {
@@ -85,15 +91,18 @@ State decode_state(const std::vector<std::uint8_t>& bytes, const Model& model) {
     s.t = r.get<double>();
     s.step = r.get<std::uint64_t>();
     s.external_work = r.get<double>();
+    s.energy_scale = v1 ? 0.0 : r.get<double>();
     for (Vector* x : {&s.u, &s.v, &s.a}) {
         x->resize(model.dof_count());
         r.raw(x->data(), sizeof(double) * x->size());
     }
     if (r.at != bytes.size()) throw protocol::SolverError("bad_config", "structure: checkpoint has trailing bytes");
     // A damaged file: NaN in the state went out in READY's interface state, and t = inf passed every time check.
-    if (!std::isfinite(s.t) || !std::isfinite(s.external_work) || !s.u.allFinite() || !s.v.allFinite() || !s.a.allFinite())
-        throw protocol::SolverError("bad_config", "structure: the checkpoint holds a time, load work, displacement, velocity "
-                                                  "or acceleration that is not a finite number; the file is damaged");
+    if (!std::isfinite(s.t) || !std::isfinite(s.external_work) || !(s.energy_scale >= 0.0 && std::isfinite(s.energy_scale)) ||
+        !s.u.allFinite() || !s.v.allFinite() || !s.a.allFinite())
+        throw protocol::SolverError("bad_config", "structure: the checkpoint holds a time, load work, energy scale, "
+                                                  "displacement, velocity or acceleration that is not a finite number "
+                                                  "(or a negative energy scale); the file is damaged");
     return s;
 }
 

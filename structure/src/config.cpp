@@ -112,6 +112,7 @@ StructureConfig StructureConfig::from_value(const Value& section) {
     c.time.steps_per_period = t.at("steps_per_period").as_double();
     c.time.max_numerical_damping = t.at("max_numerical_damping").as_double();
 
+    c.failure.max_energy_created = s.at("failure").at("max_energy_created").as_double();
     const Value& n = s.at("newton");
     c.newton = {n.at("tolerance").as_double(), static_cast<int>(n.at("max_iterations").as_int()),
                 static_cast<int>(n.at("load_steps").as_int())};

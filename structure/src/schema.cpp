@@ -350,13 +350,25 @@ TableSchema build() {
     newton.integer("load_steps", "static solves (initial equilibrium): load increments").at_least(1).at_most(10000)
         .fallback(10);
 
+    auto& failure = s.table("failure", "When a run stops as diverged (beyond non-finite or absurd displacements).");
+    failure.number("max_energy_created",
+                   "stop when kinetic + strain energy exceeds the initial energy plus the loads' work by this "
+                   "fraction of the largest of (initial energy + |load work|) and (kinetic + strain) so far: "
+                   "Newmark and generalized-alpha can create energy in large corotational motions at coarse "
+                   "steps; 0 = off")
+        .at_least(0).at_most(1).fallback(0.1);
+
     auto& init = s.table("initial", "Initial state at t0 (default: undeformed, at rest); READY passes the interface's "
                                     "state at t0 on to the fluid and the watchpoints");
     init.boolean("static_equilibrium", "start from static equilibrium under the scene loads at t0 (and any preload)")
         .fallback(false);
     init.integer("mode", "start deflected in this natural mode (1 = fundamental), at rest; 0 = off").at_least(0)
         .fallback(0);
-    init.number("mode_amplitude", "largest nodal translation of that mode shape").unit("m").fallback(0.0);
+    init.number("mode_amplitude", "largest nodal translation of that mode shape; the shape is signed so that its "
+                                  "largest translation component (x or y) is positive, so a negative amplitude "
+                                  "starts the other way")
+        .unit("m")
+        .fallback(0.0);
     auto& pre = init.table_array("preload", "Point loads held at t0 and released: a plucked start from rest.");
     add_point_load_keys(pre);
 
@@ -376,7 +388,7 @@ Value validated_config(const Value& section, const std::string& source) {
     if (input.is_table()) {
         // Present-but-empty optional tables make the validator fill their defaults.
         auto& t = input.as_table_mut();
-        for (const char* name : {"damping", "time", "newton", "initial"})
+        for (const char* name : {"damping", "time", "newton", "failure", "initial"})
             if (!t.contains(name)) t[name].make_table();
     }
     schema::Errors errors;

@@ -157,5 +157,43 @@ def test_frames_keep_their_times_and_no_window_passes_the_end():
             assert max(f["windows/t"][:]) <= frames[-1] * (1 + 1e-12), (settings, f["windows/t"][-3:])
 
 
+def test_an_integrator_creating_energy_stops_the_run():
+    """Newmark and generalized-alpha are unconditionally stable for linear problems only. The co-rotational
+    cantilever of sweeps/stability_corotational.toml (P L^2/EI = 2 applied suddenly, undamped, to 0.3 s) at
+    Newmark's 5.0e-4 s step ended "completed" before 2026-11-27 (a review), its kinetic and strain energy grown
+    to 29 kJ against 1.6 kJ of load work, the created energy 7 times larger every 0.05 s. The structure now
+    stops the run when the energy created passes failure.max_energy_created = 0.1 of the largest energy it has
+    had or been given, naming step, time and energies; it then also records it as the run's failure. The
+    check is what stops it (off, the same run completes with 0.12 of that scale created, measured from its
+    window rows), and a step half that size completes with under 1e-3 created (measured 3e-4 at most)."""
+    scene = os.path.join(harness.ROOT, "scenarios", "beam_only.toml")
+    settings = ["run.end_time=0.3", "structure.formulation=corotational", "structure.point_loads[0].force=[0.0, -2.8e5]",
+                "structure.damping.model=none", "structure.time.resolved_modes=1", "structure.time.steps_per_period=2",
+                "structure.time.integrator=newmark"]
+    args = [a for s in settings for a in ("--set", s)]
+
+    def created(f):
+        w = f["windows"]
+        motion, work = w["structure.kinetic_energy"][:] + w["structure.strain_energy"][:], w["structure.external_work"][:]
+        scale = max(max(abs(x) for x in work), max(motion))
+        return max(m - x for m, x in zip(motion, work)) / scale
+
+    out = harness.out_dir("energy-created")
+    code, text = harness.sphfsi("run", scene, "--out", out, "--quiet", *args, "--set", "structure.time.dt_max=5e-4", timeout=60)
+    assert code != 0 and "energy created" in text and "above failure.max_energy_created = 0.1" in text, text
+    assert "structure: step " in text and ", t=0.2" in text, text
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert "energy created" in f.attrs["status"], f.attrs["status"]
+    out = harness.out_dir("energy-created-off")
+    harness.sphfsi("run", scene, "--out", out, "--quiet", *args, "--set", "structure.time.dt_max=5e-4",
+                   "--set", "structure.failure.max_energy_created=0", check=0, timeout=60)
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert f.attrs["status"] == "completed" and created(f) > 0.1, created(f)
+    out = harness.out_dir("energy-created-fine")
+    harness.sphfsi("run", scene, "--out", out, "--quiet", *args, "--set", "structure.time.dt_max=2.5e-4", check=0, timeout=60)
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert f.attrs["status"] == "completed" and created(f) < 1e-3, created(f)
+
+
 if __name__ == "__main__":
     harness.main(globals())

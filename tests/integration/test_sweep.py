@@ -472,7 +472,8 @@ max_runs = 12
     assert code == 0, msg
     code, msg = harness.sphfsi("run", BEAM, "--out", os.path.join(d, "above"), "--quiet", *base,
                                "--set", f"structure.time.dt_max={bad!r}")
-    assert code == 1 and "not_converged" in msg, msg
+    # Newton's divergence stopped it until 2026-11-27; the structure's energy check now stops it first.
+    assert code == 1 and ("not_converged" in msg or "energy created" in msg), msg
     assert os.path.getsize(os.path.join(out, "thresholds.png")) > 5000
     print(f"newmark, corotational, P L^2/EI = 2: stable up to dt = {t:g} s, fails at {bad:g} s ({runs} runs)")
 

@@ -75,6 +75,7 @@ TEST_CASE("co-rotational Rayleigh damping damps deformation, not rigid rotation"
     set(s, "damping.ratios", vec(0.02, 0.02));
     set(s, "damping.frequencies", vec(10.0, 20.0));
     set(s, "time.integrator", Value("newmark"));
+    set(s, "failure.max_energy_created", Value(0.0));  // the spin is set by hand, unknown to the energy baseline
     FrameDynamics f(config(s));
     const double alpha = f.rayleigh_alpha();
     REQUIRE(f.rayleigh_beta() > 0.0);

@@ -17,8 +17,11 @@ using namespace sphfsi::structure;
 namespace {
 constexpr double pi = std::numbers::pi;
 
-Value mode_scene(const char* integrator, double rho_inf = 0.9, int n = 10) {
+Value mode_scene(const char* integrator, double rho_inf = 0.9, int n = 10, bool energy_check = true) {
     Value s = beam(n);
+    // The amplification matrix is measured from states set by hand, whose energy the initial state's baseline
+    // knows nothing of (FrameDynamics::check_energy).
+    if (!energy_check) set(s, "failure.max_energy_created", Value(0.0));
     set(s, "time.integrator", Value(integrator));
     set(s, "time.rho_inf", Value(rho_inf));
     set(s, "initial.mode", Value(1));
@@ -114,7 +117,7 @@ TEST_CASE("generalized-alpha: spectral radius -> rho_inf at large omega dt, ~1 a
     // the amplification matrix tends to rho_inf as omega dt -> infinity. At omega dt = 1e4 the
     // remainder is O(1/(omega dt)); acceptance: within 0.01 of rho_inf.
     for (double rho : {0.0, 0.5, 0.8, 1.0}) {
-        FrameDynamics f(config(mode_scene("generalized_alpha", rho)));
+        FrameDynamics f(config(mode_scene("generalized_alpha", rho, 10, false)));
         const double w = f.modes().omega(0);
         const double high = spectral_radius(amplification(f, 1e4 / w));
         const double low = spectral_radius(amplification(f, 0.01 / w));
@@ -123,9 +126,9 @@ TEST_CASE("generalized-alpha: spectral radius -> rho_inf at large omega dt, ~1 a
         CHECK(low == doctest::Approx(1.0).epsilon(1e-5));
     }
     // Newmark average acceleration never damps; backward Euler annihilates high frequencies.
-    FrameDynamics nm(config(mode_scene("newmark")));
+    FrameDynamics nm(config(mode_scene("newmark", 0.9, 10, false)));
     CHECK(spectral_radius(amplification(nm, 1e4 / nm.modes().omega(0))) == doctest::Approx(1.0).epsilon(1e-9));
-    FrameDynamics be(config(mode_scene("backward_euler")));
+    FrameDynamics be(config(mode_scene("backward_euler", 0.9, 10, false)));
     CHECK(spectral_radius(amplification(be, 1e4 / be.modes().omega(0))) <= 1e-3);
 }
 

@@ -6,12 +6,16 @@
 #include <doctest/doctest.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
 #include <iomanip>
 #include <numbers>
+#include <string>
 #include <tuple>
 
 #include "scenes.hpp"
 #include "sphfsi/structure/assembly.hpp"
+#include "sphfsi/protocol/solver.hpp"
 #include "sphfsi/structure/frame_dynamics.hpp"
 
 using namespace structure_test;
@@ -194,5 +198,45 @@ TEST_CASE("subspace iteration on a portal frame with a skewed roller agrees with
         const Eigen::MatrixXd gram = sub.shapes.transpose() * (f.mass() * sub.shapes);
         CHECK((gram - Eigen::MatrixXd::Identity(gram.rows(), gram.cols())).cwiseAbs().maxCoeff() <= 1e-9);
     }
+}
+}
+
+TEST_SUITE("modal") {
+TEST_CASE("a mode start deflects the same way on every mesh, and a mode that moves no node is refused") {
+    // An eigenvector's sign is arbitrary, and meshes of more than 150 free DOFs take subspace iteration
+    // instead of the dense solver: the start is signed so that the shape's largest translation component is
+    // positive (for a cantilever's modes 1 - 3, the tip's upward deflection). The amplitude is exact.
+    for (int n : {10, 20, 60}) {
+        for (int mode : {1, 2, 3}) {
+            CAPTURE(n);
+            CAPTURE(mode);
+            Value s = beam(n);
+            set(s, "initial.mode", Value(mode));
+            set(s, "initial.mode_amplitude", Value(0.01));
+            const FrameDynamics f(config(s));
+            const Vector& u = f.state().u;
+            double largest = 0.0, component = 0.0;
+            for (int i = 0; i < f.model().node_count(); ++i) {
+                largest = std::max(largest, std::hypot(u[3 * i], u[3 * i + 1]));
+                for (int k = 0; k < 2; ++k)
+                    if (std::abs(u[3 * i + k]) > std::abs(component)) component = u[3 * i + k];
+            }
+            CHECK(component > 0.0);
+            CHECK(u[3 * f.model().node_at({L, 0}) + 1] > 0.0);
+            CHECK(largest == doctest::Approx(0.01).scale(0).epsilon(1e-12));
+        }
+    }
+    // One element pinned at both ends: its two modes turn the end nodes and move neither. Before, the
+    // amplitude was divided by their zero translation and READY carried NaN.
+    Value pinned = beam(1, "pinned", "pinned");
+    set(pinned, "initial.mode", Value(1));
+    set(pinned, "initial.mode_amplitude", Value(0.01));
+    std::string msg = "accepted";
+    try {
+        const FrameDynamics f(config(pinned));
+    } catch (const sphfsi::protocol::SolverError& e) {
+        msg = e.what();
+    }
+    CHECK(msg.find("turns the nodes without moving any") != std::string::npos);
 }
 }

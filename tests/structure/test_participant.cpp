@@ -196,14 +196,25 @@ TEST_CASE("a damaged or mistimed checkpoint is refused") {
     };
     REQUIRE(message_of(blob, t) == "accepted");
     CHECK(message_of(blob, 0.5).rfind("bad_config: structure: the checkpoint's state is at t = ", 0) == 0);
-    const std::size_t t_at = 25 + 24, u_at = t_at + 24;
-    for (const double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()})
-        for (const std::size_t at : {t_at, t_at + 16, u_at, u_at + 8}) {
+    // After the magic (25 bytes) and the counts and fingerprint (24): t, step, load work, energy scale, u.
+    const std::size_t t_at = 25 + 24, scale_at = t_at + 24, u_at = t_at + 32;
+    for (const double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(), -1.0})
+        for (const std::size_t at : {t_at, t_at + 16, scale_at, u_at, u_at + 8}) {
+            if (bad == -1.0 && at != scale_at) continue;  // only the energy scale cannot be negative
             CAPTURE(at);
+            CAPTURE(bad);
             std::vector<std::uint8_t> damaged = blob;
             std::memcpy(damaged.data() + at, &bad, sizeof bad);
-            CHECK(message_of(damaged, t).find("not a finite number; the file is damaged") != std::string::npos);
+            const std::string msg = message_of(damaged, t);
+            CHECK(msg.find("not a finite number") != std::string::npos);
+            CHECK(msg.find("the file is damaged") != std::string::npos);
         }
+    // A version-1 checkpoint (before the energy scale, 2026-11-27) is still read.
+    std::vector<std::uint8_t> v1 = blob;
+    v1.erase(v1.begin() + static_cast<std::ptrdiff_t>(scale_at), v1.begin() + static_cast<std::ptrdiff_t>(scale_at + 8));
+    REQUIRE(v1[24] == '2');
+    v1[24] = '1';
+    CHECK(message_of(v1, t) == "accepted");
 }
 
 TEST_CASE("snapshot fields") {

@@ -1,8 +1,8 @@
 #pragma once
 // Byte image of a State for CHECKPOINT / resume. Doubles are stored bit for bit, so a resumed run
-// continues with identical numbers. Layout (little-endian): magic "sphfsi-structure-state-v1",
-// u64 dof count, u64 element count, f64 mesh fingerprint, f64 t, u64 step, f64 external work, then
-// u, v, a (dof count f64 each).
+// continues with identical numbers. Layout (little-endian): magic "sphfsi-structure-state-v2",
+// u64 dof count, u64 element count, f64 mesh fingerprint, f64 t, u64 step, f64 external work, f64 energy
+// scale, then u, v, a (dof count f64 each). Version 1 (no energy scale) is still read.
 #include <cstdint>
 #include <vector>
 

@@ -70,6 +70,9 @@ struct NewtonSpec {
     double tolerance = 1e-8;
     int max_iterations = 25, load_steps = 10;
 };
+struct FailureSpec {
+    double max_energy_created = 0.1;  // fraction of the energy scale (FrameDynamics::check_energy); 0 = off
+};
 struct InitialSpec {
     bool static_equilibrium = false;
     int mode = 0;
@@ -91,6 +94,7 @@ struct StructureConfig {
     DampingSpec damping;
     TimeSpec time;
     NewtonSpec newton;
+    FailureSpec failure;
     InitialSpec initial;
 
     // Validates `section` against scene_schema() (throws ConfigError) and reads it.

@@ -20,6 +20,7 @@ struct State {
     std::uint64_t step = 0;
     Vector u, v, a;             // full-DOF displacement, velocity, (algorithmic) acceleration
     double external_work = 0.0; // integral of f_ext . du, trapezoidal per step [J]
+    double energy_scale = 0.0;  // the largest of initial energy + |work| and kinetic + strain so far (check_energy)
 };
 
 struct Energies {
@@ -83,6 +84,7 @@ private:
     SparseMatrix reduce(const SparseMatrix& full) const { return model_.T.transpose() * full * model_.T; }
     void check_finite(const Vector& x, const char* quantity, double t) const;
     void check_bounded(const Vector& u, double t) const;
+    void check_energy(const Energies& e);
     static bool round_off_floor(int iteration, double norm, double previous, double scale, double tol);
     void setup_damping();
     void unwrap_rotations(Vector& u, const Vector& start) const;
@@ -95,6 +97,7 @@ private:
     Modes modes_;
     double rayleigh_alpha_ = 0, rayleigh_beta_ = 0;
     double dt_accuracy_ = 0;
+    double initial_energy_ = 0;  // kinetic + strain energy of the initial state (reset)
     State state_;
     ReducedSolver solver_;      // effective matrices of the time steps
     double factorized_h_ = -1;  // linear formulation: the step size the factorization belongs to
