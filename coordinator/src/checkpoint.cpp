@@ -61,6 +61,45 @@ F64Array unpack_array(const msgpack::object& o, const char* what) {
     return r;
 }
 
+// IQN-ILS's secant history (session.hpp): per window, its V and W columns as doubles.
+void pack_secants(Packer& pk, const SecantHistory& h) {
+    pk.pack_array(static_cast<std::uint32_t>(h.size()));
+    for (const SecantWindow& w : h) {
+        pk.pack_array(2);
+        for (const auto* columns : {&w.V, &w.W}) {
+            pk.pack_array(static_cast<std::uint32_t>(columns->size()));
+            for (const auto& c : *columns) pk.bin(c.data(), c.size() * sizeof(double));
+        }
+    }
+}
+
+// `nd`: the interface's displacement values (2 per vertex): a V column has nd, a W column 2 nd.
+SecantHistory unpack_secants(const msgpack::object& o, std::size_t nd) {
+    SecantHistory h;
+    const auto& windows = array_of(o, 0, UINT32_MAX, "the IQN-ILS secant history");
+    for (std::uint32_t k = 0; k < windows.size; ++k) {
+        const auto& w = array_of(windows.ptr[k], 2, 2, "an IQN-ILS secant window");
+        SecantWindow out;
+        std::size_t length = nd;
+        for (auto* columns : {&out.V, &out.W}) {
+            const auto& list = array_of(w.ptr[columns == &out.V ? 0 : 1], 1, UINT32_MAX, "IQN-ILS secant columns");
+            for (std::uint32_t j = 0; j < list.size; ++j) {
+                const auto& bin = bin_of(list.ptr[j], "an IQN-ILS secant column");
+                if (bin.size != length * sizeof(double))
+                    throw std::runtime_error("an IQN-ILS secant column has " + std::to_string(bin.size) + " bytes, not " +
+                                             std::to_string(length * sizeof(double)) + " for this interface");
+                std::vector<double> c(length);
+                if (length > 0) std::memcpy(c.data(), bin.ptr, bin.size);
+                columns->push_back(std::move(c));
+            }
+            length = 2 * nd;
+        }
+        if (out.V.size() != out.W.size()) throw std::runtime_error("an IQN-ILS secant window has unequal V and W columns");
+        h.push_back(std::move(out));
+    }
+    return h;
+}
+
 // The interface arrays are per vertex, and the cells index the vertices.
 void check_interface(const InterfaceState& s) {
     const std::size_t n = s.mesh.vertices.values.size();
@@ -100,7 +139,7 @@ void write_checkpoint(const std::filesystem::path& file, const Checkpoint& c) {
     pack_array(pk, c.interface.displacement);
     pack_array(pk, c.interface.velocity);
     pack_array(pk, c.interface.previous_displacement);
-    pk.pack_array(7);
+    pk.pack_array(8);
     pack_array(pk, c.interface.force);
     pk.f64(c.interface.previous_dt);
     pack_array(pk, c.interface.fluid_displacement);
@@ -108,6 +147,7 @@ void write_checkpoint(const std::filesystem::path& file, const Checkpoint& c) {
     pk.f64(c.interface.created_total);
     pk.f64(c.interface.fluid_energy);
     pk.f64(c.interface.total_energy);
+    pack_secants(pk, c.interface.secants);
     pk.pack_map(static_cast<std::uint32_t>(c.states.size()));
     for (const auto& [role, bytes] : c.states) {
         pk.pack(role);
@@ -151,7 +191,7 @@ Checkpoint read_checkpoint(const std::filesystem::path& file) {
         c.interface.displacement = unpack_array(i.ptr[3], "the interface displacement");
         c.interface.velocity = unpack_array(i.ptr[4], "the interface velocity");
         c.interface.previous_displacement = unpack_array(i.ptr[5], "the previous interface displacement");
-        const auto& coupling = array_of(a.ptr[12], 2, 7, "the coupling state");
+        const auto& coupling = array_of(a.ptr[12], 2, 8, "the coupling state");
         c.interface.force = unpack_array(coupling.ptr[0], "the interface force");
         c.interface.previous_dt = coupling.ptr[1].as<double>();
         // (Checkpoints written before the interface energy balance lack it: the fluid's displacement then
@@ -163,9 +203,12 @@ Checkpoint read_checkpoint(const std::filesystem::path& file) {
             c.interface.created_total = coupling.ptr[4].as<double>();
             c.interface.fluid_energy = coupling.ptr[5].as<double>();
         }
-        // Else from the next window. Builds before 2026-11-27 wrote 0 for "not known yet".
-        if (coupling.size > 6 && coupling.ptr[6].as<double>() != 0.0) c.interface.total_energy = coupling.ptr[6].as<double>();
+        // NaN: from the next window. Builds before 2026-11-27 wrote 0 for "not known yet" and no secant history
+        // (their 7 entries); a baseline of exactly 0 is kept from the 8-entry layout on (a review).
+        if (coupling.size > 7) c.interface.total_energy = coupling.ptr[6].as<double>();
+        else if (coupling.size > 6 && coupling.ptr[6].as<double>() != 0.0) c.interface.total_energy = coupling.ptr[6].as<double>();
         check_interface(c.interface);
+        if (coupling.size > 7) c.interface.secants = unpack_secants(coupling.ptr[7], c.interface.displacement.values.size());
         if (a.ptr[13].type != msgpack::type::MAP) throw std::runtime_error("the participants' states are not a map");
         const auto& m = a.ptr[13].via.map;
         for (std::uint32_t k = 0; k < m.size; ++k) {

@@ -66,6 +66,7 @@ void InterfaceState::reset(const InterfaceMesh& m) {
     previous_dt = 0.0;
     work_total = created_total = fluid_energy = 0.0;
     total_energy = std::numeric_limits<double>::quiet_NaN();
+    secants.clear();
 }
 
 const F64Array& vertex_field(const std::string& role, const Fields& fields, const std::string& name, std::size_t vertices) {

@@ -5,7 +5,9 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
+#include <limits>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -47,13 +49,29 @@ Checkpoint sample() {
     protocol::InterfaceMesh mesh{protocol::F64Array({6, 2}, {0, 0, 1, 0, 2, 0, 0, 1, 1, 1, 2, 1}),
                                  protocol::I32Array({2, 4}, {0, 1, 4, 3, 1, 2, 5, 4})};
     c.interface.reset(mesh);
+    // Each array different, so that a reader that swapped two of them fails the round trip.
     for (std::size_t k = 0; k < 12; ++k) {
-        c.interface.displacement.values[k] = 1e-3 * static_cast<double>(k);
-        c.interface.force.values[k] = -static_cast<double>(k);
+        const double x = static_cast<double>(k) + 1.0;
+        c.interface.displacement.values[k] = 1e-3 * x;
+        c.interface.velocity.values[k] = 2e-3 * x;
+        c.interface.previous_displacement.values[k] = 3e-3 * x;
+        c.interface.force.values[k] = -x;
+        c.interface.fluid_displacement.values[k] = 4e-3 * x;
     }
     c.interface.previous_dt = 1e-3;
     c.interface.work_total = 0.5;
+    c.interface.created_total = 0.25;
+    c.interface.fluid_energy = 7.0;
     c.interface.total_energy = 2.0;
+    // Two IQN-ILS windows of secant pairs: V columns of 12 values (the displacements), W of 24.
+    for (int w = 0; w < 2; ++w) {
+        SecantWindow s;
+        for (int j = 0; j <= w; ++j) {
+            s.V.emplace_back(12, 0.1 * (w + 1) + j);
+            s.W.emplace_back(24, -0.2 * (w + 1) - j);
+        }
+        c.interface.secants.push_back(s);
+    }
     c.states = {{"fluid", {1, 2, 3}}, {"structure", {4, 5}}};
     c.loop_wall_s = 3.5;
     c.loop_cpu_s = 3.0;
@@ -82,12 +100,38 @@ TEST_SUITE("checkpoint") {
         CHECK(r.t == c.t);
         CHECK(r.output_index == c.output_index);
         CHECK(r.windows == c.windows);
+        CHECK(r.scene_file == c.scene_file);
+        CHECK(r.checkpoint_index == c.checkpoint_index);
+        CHECK(r.steps == c.steps);
+        CHECK(r.fluid_dt == c.fluid_dt);
+        CHECK(r.structure_dt == c.structure_dt);
         CHECK(r.interface.mesh == c.interface.mesh);
         CHECK(r.interface.displacement == c.interface.displacement);
+        CHECK(r.interface.velocity == c.interface.velocity);
+        CHECK(r.interface.previous_displacement == c.interface.previous_displacement);
         CHECK(r.interface.force == c.interface.force);
+        CHECK(r.interface.fluid_displacement == c.interface.fluid_displacement);
+        CHECK(r.interface.previous_dt == c.interface.previous_dt);
+        CHECK(r.interface.work_total == c.interface.work_total);
+        CHECK(r.interface.created_total == c.interface.created_total);
+        CHECK(r.interface.fluid_energy == c.interface.fluid_energy);
         CHECK(r.interface.total_energy == c.interface.total_energy);
+        REQUIRE(r.interface.secants.size() == 2);
+        for (std::size_t w = 0; w < 2; ++w) {
+            CHECK(r.interface.secants[w].V == c.interface.secants[w].V);
+            CHECK(r.interface.secants[w].W == c.interface.secants[w].W);
+        }
         CHECK(r.states == c.states);
+        CHECK(r.loop_wall_s == c.loop_wall_s);
         CHECK(r.loop_cpu_s == c.loop_cpu_s);
+        // A baseline of exactly 0 is a baseline, not "unknown" (NaN), which reads back as NaN.
+        Checkpoint zero = sample();
+        zero.interface.total_energy = 0.0;
+        write_checkpoint(file, zero);
+        CHECK(read_checkpoint(file).interface.total_energy == 0.0);
+        zero.interface.total_energy = std::numeric_limits<double>::quiet_NaN();
+        write_checkpoint(file, zero);
+        CHECK(std::isnan(read_checkpoint(file).interface.total_energy));
         // A fluid alone has no interface: its arrays have no shape at all.
         write_checkpoint(file, Checkpoint{});
         CHECK(read_checkpoint(file).interface.mesh.vertices.values.empty());
@@ -141,6 +185,14 @@ TEST_SUITE("checkpoint") {
         check_refused(file);
         c = sample();
         c.interface.mesh.cells.values[3] = 6;  // no vertex 6
+        write_checkpoint(file, c);
+        check_refused(file);
+        c = sample();
+        c.interface.secants[1].W[0].pop_back();  // a W column one value short
+        write_checkpoint(file, c);
+        check_refused(file);
+        c = sample();
+        c.interface.secants[0].V.push_back(c.interface.secants[0].V[0]);  // a V column without its W
         write_checkpoint(file, c);
         check_refused(file);
         std::filesystem::remove(file);

@@ -97,6 +97,30 @@ def test_resumed_coupled_run_matches_uninterrupted_run():
                 assert err <= 1e-10, (name, path)
 
 
+def test_a_resumed_iqn_ils_run_iterates_as_the_uninterrupted_one():
+    """IQN-ILS reuses the secant pairs of earlier windows (coupling.iqn_reuse = 8): the checkpoint keeps them.
+    Before 2026-11-27 it did not (a review), and the resumed run iterated along another path: the plate under
+    water of sweeps/stability_added_mass.toml at mass ratio 0.1, where IQN-ILS takes 2 - 5 iterations per
+    window, ended with other iteration counts and states after the resume."""
+    scene = os.path.join(harness.ROOT, "tests", "integration", "scenes", "swap_builtin.toml")
+    settings = ["--set", "structure.material.E=7.0e8", "--set", "structure.members[0].interface_padding=[0.0, 0.03]",
+                "--set", "structure.material.rho=100.0", "--set", "coupling.scheme=implicit-iqn-ils",
+                "--set", "run.end_time=0.03", "--set", "run.checkpoint_interval=0.01", "--set", "run.output_interval=0.005"]
+    full = harness.out_dir("resume-iqn-full")
+    harness.sphfsi("run", scene, "--out", full, "--quiet", *settings, check=0, timeout=240)
+    cut = killed_after_first_checkpoint(scene, settings, "resume-iqn-cut")
+    with harness.record(os.path.join(full, "record.h5")) as a, harness.record(os.path.join(cut, "record.h5")) as b:
+        assert b.attrs["status"] == "completed"
+        assert np.array_equal(a["windows/t"][:], b["windows/t"][:]), "the resumed run took different windows"
+        assert np.array_equal(a["windows/iterations"][:], b["windows/iterations"][:]), "other iteration counts"
+        assert a["windows/iterations"][:].max() >= 3, "no window reused pairs"
+        for path in ("frames/fluid/position", "frames/structure/displacement"):
+            x, y = a[path][-1], b[path][-1]
+            err = np.abs(x - y).max() / max(np.abs(x).max(), 1e-300)
+            print(f"iqn-ils: {path}: final frames differ by {err:.1e} relative")
+            assert err <= 1e-10, path
+
+
 def fluid_history(out, until):
     """The fluid frames' times and positions up to time `until`, from out/record.h5 (which must open)."""
     with harness.record(os.path.join(out, "record.h5")) as f:

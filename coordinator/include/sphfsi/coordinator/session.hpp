@@ -1,8 +1,10 @@
 #pragma once
 // The participants as the coupling schemes see them: ADVANCE / SAVE / RESTORE with timing, and the
 // interface state passed between them.
+#include <deque>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "sphfsi/coordinator/hub.hpp"
 #include "sphfsi/protocol/arrays.hpp"
@@ -37,6 +39,14 @@ private:
     std::map<std::string, Asked> asked_;
 };
 
+// IQN-ILS's secant pairs of one converged window, newest first: V the differences of the displacement
+// residuals (2 values per vertex), W those of the structure's answers, velocities included (4 per vertex).
+struct SecantWindow {
+    std::vector<std::vector<double>> V, W;
+};
+// Those of the last coupling.iqn_reuse windows that left pairs, newest first.
+using SecantHistory = std::deque<SecantWindow>;
+
 // What travels between the two sides, as of the start of the current window.
 struct InterfaceState {
     protocol::InterfaceMesh mesh;
@@ -54,6 +64,9 @@ struct InterfaceState {
     double work_total = 0.0, created_total = 0.0, fluid_energy = 0.0;
     double total_energy = std::numeric_limits<double>::quiet_NaN();
     double previous_dt = 0.0;
+    // Kept across windows by IQN-ILS (accelerators.hpp), here so that a checkpoint holds it and a resumed
+    // run iterates as the uninterrupted one (until 2026-11-27 it did not, a review).
+    SecantHistory secants;
 
     void reset(const protocol::InterfaceMesh& m);
     std::size_t vertices() const { return mesh.vertices.rows(); }
