@@ -187,6 +187,17 @@ void check_combinations(const Value& fluid, const std::string& path, Errors& err
                                       (model == "pcisph" ? " (artificial viscosity scales with it)" : "") +
                                       "; set pressure.c0 or pressure.u_max");
     }
+    // The repulsive force's default strength is 5 |g| H: without gravity or water it is 0, and the force,
+    // turned on, silently does nothing (a review found a test relying on it that way).
+    const Value& boundary = fluid.at("boundary");
+    if (boundary.at("repulsive").as_bool() && num(boundary, "repulsive_d") == 0.0) {
+        const auto g = fluid.at("gravity").as_doubles();
+        const Value* water = fluid.find("water");
+        if (std::hypot(g[0], g[1]) == 0.0 || !water || water->as_array().empty())
+            errors.add(&boundary, "key '" + key(path, "boundary.repulsive_d") + "': the repulsive force's default "
+                                      "strength 5 |g| H is 0 without gravity and water; set boundary.repulsive_d > 0 "
+                                      "(m^2/s^2) or turn boundary.repulsive off");
+    }
     const Value& failure = fluid.at("failure");
     if (num(failure, "min_density_ratio") >= num(failure, "max_density_ratio"))
         errors.add(&failure, "key '" + key(path, "failure") + "': min_density_ratio must be below max_density_ratio");
@@ -350,8 +361,11 @@ TableSchema build() {
                     "particles); \"adami\": pressure extrapolated from the fluid (Adami, Hu & Adams 2012)")
         .fallback("adami");
     boundary.choice("slip", {"no_slip", "free_slip"},
-                    "\"no_slip\": viscous terms see the wall's or solid's extrapolated ghost velocity (Adami); \"free_slip\": "
-                    "no viscous interaction with walls or solids, on either side of a pair")
+                    "\"no_slip\": viscous terms see walls and solids moving, with \"adami\" at the ghost velocity "
+                    "2 v_wall - v extrapolated from the fluid (Adami), with \"dummy\" at their own velocity (the "
+                    "thesis's: the no-slip plane then lies inside the wall, and Morris's Couette flow at L/20 is "
+                    "2.8 % off in L2, against 0.04 % with adami); \"free_slip\": no viscous interaction with walls "
+                    "or solids, on either side of a pair")
         .fallback("no_slip");
     boundary.boolean("repulsive", "add Monaghan's (1994) repulsive wall force within dp of a wall particle: the "
                                   "non-penetration guard for spray, which carries no pressure for the Adami walls to push "

@@ -16,6 +16,8 @@ namespace sphfsi::fluid {
 
 using protocol::SolverError;
 
+// Fluid and walls only: solid particles stay where the structure puts them (move_solids, and PCISPH's
+// predicted positions, come from its kinematics), inside the period (check_inside_tank).
 void Simulation2D::wrap_periodic() {
     auto& P = st_.P;
     for (int k = 0; k < Dim; ++k) {
@@ -24,6 +26,7 @@ void Simulation2D::wrap_periodic() {
         const long long n = static_cast<long long>(P.size());
 #pragma omp parallel for schedule(static)
         for (long long q = 0; q < n; ++q) {
+            if (P.kind[static_cast<std::size_t>(q)] == Kind::Solid) continue;
             double& x = P.x[static_cast<std::size_t>(q)][k];
             if (x < lo || x >= lo + len) {
                 x -= std::floor((x - lo) / len) * len;
@@ -111,7 +114,8 @@ void Simulation2D::evaluate() {
             if (!fluid && !(dummy && is_boundary(P.kind[i]))) continue;  // Adami: extrapolated below
             if (!pcisph) {
                 double p = tait ? tait_.pressure(P.rho[i]) : standard_.pressure(P.rho[i]);
-                // A boundary particle never pulls fluid onto the wall; fluid may be clamped by choice.
+                // A dummy wall particle never pulls fluid onto the wall (Adami walls follow clamp_negative:
+                // extrapolate_boundary_state); fluid may be clamped by choice.
                 if (!fluid || s_.clamp_negative) p = std::max(p, 0.0);
                 P.p[i] = p;
             }
@@ -157,9 +161,14 @@ const RateFactors* Simulation2D::fill_rate_factors() {
     return factors;
 }
 
+// A wall pressure below the equation of state's vacuum (p < p_b - B for Tait, -k rho0 for the ideal gas;
+// reachable with negative pressures kept and a small c0) inverts to a density of 0 or below, and 1/rho in the
+// pair terms then made the fluid's accelerations infinite, reported as a non-finite fluid velocity (a review,
+// 2026-11-27). A wall particle's density is held at the fluid's own lower bound, failure.min_density_ratio.
 double Simulation2D::boundary_density(double p) const {
     if (s_.pressure == PressureModel::Pcisph) return s_.rho0;
-    return s_.pressure == PressureModel::Wcsph ? tait_.density(p) : standard_.density(p);
+    const double rho = s_.pressure == PressureModel::Wcsph ? tait_.density(p) : standard_.density(p);
+    return std::max(rho, s_.min_density_ratio * s_.rho0);
 }
 
 // A coupling window starts: the solid particles take the new window's kinematics, and the rates that start

@@ -43,16 +43,21 @@ double distance_to_quad(const std::array<Vec2, 4>& q, const Vec2& p) {
 // The structure's mesh, in its reference position, must lie in the tank, walls included (a plate's ends may
 // sit in the side walls). Elsewhere its solid particles would be outside every wall, and the neighbour grid,
 // which spans all particles, would grow with the distance: a mesh 1e6 m away took gigabytes before a step.
+// A periodic axis has no walls, and the mesh must lie within its period: solid particles go where the
+// structure puts them, never wrapped, so one across the seam would sit a period away from the water it meets
+// there in every rate that wraps positions (a review, 2026-11-27).
 void check_inside_tank(const protocol::InterfaceMesh& mesh, const FluidSettings& s) {
     const double wall = s.wall_layers * s.dp;
-    const double x_lo = -wall, x_hi = s.tank_width + wall, y_lo = -wall, y_hi = s.tank_height + wall;
+    const double x_wall = s.periodic[0] ? 0.0 : wall, y_wall = s.periodic[1] ? 0.0 : wall;
+    const double x_lo = -x_wall, x_hi = s.tank_width + x_wall, y_lo = -y_wall, y_hi = s.tank_height + y_wall;
     for (std::uint64_t v = 0; v < mesh.vertices.rows(); ++v) {
         const double x = mesh.vertices(v, 0), y = mesh.vertices(v, 1);
         if (x < x_lo || x > x_hi || y < y_lo || y > y_hi) {
-            char buf[320];
+            char buf[400];
             std::snprintf(buf, sizeof buf,
                           "the structure's interface mesh has vertex %llu at (%.6g, %.6g) m, outside the tank and its walls "
-                          "(x in [%.6g, %.6g], y in [%.6g, %.6g] m): fluid.tank and the structure's geometry disagree",
+                          "(x in [%.6g, %.6g], y in [%.6g, %.6g] m, a periodic axis's period alone): fluid.tank and the "
+                          "structure's geometry disagree",
                           static_cast<unsigned long long>(v), x, y, x_lo, x_hi, y_lo, y_hi);
             throw SolverError("bad_config", buf);
         }

@@ -369,7 +369,7 @@ TEST_SUITE("adapter") {
             const double dp = 0.005, m = 1000.0 * dp * dp;
             Value f = with(wcsph(water_tank(dp, 0.5, 0.2, 0.5, 0.2)),
                            {{"periodic", "xy"}, {"boundary.slip", slip}, {"viscosity.alpha", 0.1}, {"boundary.repulsive", true},
-                            {"pressure.c0", 20.0}, {"pressure.clamp_negative", false}});
+                            {"boundary.repulsive_d", 10.0}, {"pressure.c0", 20.0}, {"pressure.clamp_negative", false}});
             f.as_table_mut()["gravity"] = vec2(0.0, 0.0);
             const auto solver = start_around(f, plate());
             SphSolver& s = *solver;
@@ -384,6 +384,14 @@ TEST_SUITE("adapter") {
             std::vector<std::pair<std::int32_t, Vec2>> before;  // ids: the step re-sorts particles by cell
             for (std::size_t i = 0; i < P.size(); ++i)
                 if (P.kind[i] == Kind::Fluid) before.emplace_back(P.id[i], P.v[i]);
+            // The repulsive force acts within dp of a solid particle: some fluid must be there, or its part of the
+            // balance is not tested (before 2026-11-27 its strength was 0 here: no gravity, D = 5 |g| H; a review).
+            std::size_t close = 0;
+            for (std::size_t i = 0; i < P.size(); ++i)
+                for (std::size_t j = 0; P.kind[i] == Kind::Fluid && j < P.size(); ++j)
+                    if (P.kind[j] == Kind::Solid && sphfsi::fluid::norm2(P.x[i] - P.x[j]) < dp * dp) ++close;
+            MESSAGE(close, " fluid-solid pairs within dp, where the repulsive force acts");
+            CHECK(close > 0);
             step(s, dt, 1, at_rest);
             std::vector<Vec2> v_after(P.size());
             for (std::size_t i = 0; i < P.size(); ++i) v_after[static_cast<std::size_t>(P.id[i])] = P.v[i];
@@ -468,6 +476,25 @@ TEST_SUITE("adapter") {
                 code = e.code();
             }
             CHECK(code == "bad_config");
+        }
+        {  // On a periodic axis the mesh must lie within the period (its solids are never wrapped): the plate
+           // moved to x in [-0.005, 0.095] m, its end 2 dp into the left wall's layers, which a walled axis allows.
+            InterfaceMesh across = plate();
+            for (std::size_t v = 0; v < across.vertices.rows(); ++v) across.vertices(v, 0) -= 0.205;
+            for (const bool periodic : {false, true}) {
+                CAPTURE(periodic);
+                SphSolver t;
+                sphfsi::protocol::InitRequest r = req;
+                if (periodic) r.config = with(f, {{"periodic", "x"}});
+                r.interface = across;
+                std::string what = "accepted";
+                try {
+                    t.init(r);
+                } catch (const sphfsi::protocol::SolverError& e) {
+                    what = e.what();
+                }
+                CHECK((what.find("a periodic axis's period alone") != std::string::npos) == periodic);
+            }
         }
         {  // A gate's solid particles and a structure's cannot share a fluid: bad_config, naming the gate.
             SphSolver t;

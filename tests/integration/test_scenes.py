@@ -106,6 +106,8 @@ MISTAKES_FOUND_LATE = [
     ("dam_break", ["fluid.gravity=[0.0,0.0]", "fluid.pressure.model=pcisph", "fluid.density.method=summation",
                    "fluid.pressure.c0=0", "fluid.viscosity.model=artificial"],
      "key 'fluid.pressure.c0': c0 cannot be estimated without gravity and water (artificial viscosity scales with it)"),
+    ("dam_break", ["fluid.gravity=[0.0,0.0]", "fluid.pressure.c0=20"],  # the scene turns the repulsive force on
+     "key 'fluid.boundary.repulsive_d': the repulsive force's default strength 5 |g| H is 0 without gravity and water"),
     ("dam_break", ["fluid.dp=1e300", "fluid.pressure.c0=10"], "key 'fluid.dp': 1e+300 m is more than the tank's"),
     ("dam_break", ["fluid.kernel=gaussian", "fluid.h_over_dp=3"], "allowed with kernel \"gaussian\": h_over_dp <= 2.66"),
     ("dam_break", ["fluid.pressure.gamma=1e300"], "key 'fluid.pressure.gamma': got 1e+300"),
