@@ -3,6 +3,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <string_view>
 
 #include "sphfsi/protocol/solver.hpp"
@@ -13,10 +14,10 @@ static_assert(std::endian::native == std::endian::little, "checkpoint layout ass
 
 namespace {
 
-constexpr std::string_view magic = "sphfsi-structure-state-v2";
-// Version 1 (before 2026-11-27) had no energy scale; it is read with the scale restarted from the resumed
-// state's own energies (FrameDynamics::check_energy raises it at the first step).
-constexpr std::string_view magic_v1 = "sphfsi-structure-state-v1";
+constexpr std::string_view magic = "sphfsi-structure-state-v3";
+// Version 1 (before 2026-11-27) had no energy check state, version 2 (the same day) its scale alone; both are
+// read, and the resumed run goes without the energy check (State::initial_energy = NaN).
+constexpr std::string_view magic_v1 = "sphfsi-structure-state-v1", magic_v2 = "sphfsi-structure-state-v2";
 
 // Changes whenever nodes or connectivity change, so a checkpoint cannot resume a different mesh.
 double fingerprint(const Model& model) {
@@ -65,6 +66,7 @@ std::vector<std::uint8_t> encode_state(const State& s, const Model& model) {
     w.put<double>(s.t);
     w.put<std::uint64_t>(s.step);
     w.put<double>(s.external_work);
+    w.put<double>(s.initial_energy);
     w.put<double>(s.energy_scale);
     for (const Vector* x : {&s.u, &s.v, &s.a}) w.raw(x->data(), sizeof(double) * x->size());
     return w.out;
@@ -74,9 +76,9 @@ State decode_state(const std::vector<std::uint8_t>& bytes, const Model& model) {
     Reader r{bytes};
     std::string head(magic.size(), '\0');
     r.raw(head.data(), head.size());
-    static_assert(magic.size() == magic_v1.size());
-    const bool v1 = head == magic_v1;
-    if (head != magic && !v1) throw protocol::SolverError("bad_config", "structure: the resume state is not a structure checkpoint");
+    static_assert(magic.size() == magic_v1.size() && magic.size() == magic_v2.size());
+    const bool v1 = head == magic_v1, v2 = head == magic_v2;
+    if (head != magic && !v1 && !v2) throw protocol::SolverError("bad_config", "structure: the resume state is not a structure checkpoint");
     const auto dofs = r.get<std::uint64_t>(), elements = r.get<std::uint64_t>();
     const double print = r.get<double>();
     auto other_mesh = [](const std::string& what) {
@@ -91,6 +93,7 @@ State decode_state(const std::vector<std::uint8_t>& bytes, const Model& model) {
     s.t = r.get<double>();
     s.step = r.get<std::uint64_t>();
     s.external_work = r.get<double>();
+    s.initial_energy = v1 || v2 ? std::numeric_limits<double>::quiet_NaN() : r.get<double>();
     s.energy_scale = v1 ? 0.0 : r.get<double>();
     for (Vector* x : {&s.u, &s.v, &s.a}) {
         x->resize(model.dof_count());
@@ -98,11 +101,13 @@ State decode_state(const std::vector<std::uint8_t>& bytes, const Model& model) {
     }
     if (r.at != bytes.size()) throw protocol::SolverError("bad_config", "structure: checkpoint has trailing bytes");
     // A damaged file: NaN in the state went out in READY's interface state, and t = inf passed every time check.
-    if (!std::isfinite(s.t) || !std::isfinite(s.external_work) || !(s.energy_scale >= 0.0 && std::isfinite(s.energy_scale)) ||
+    const bool initial_ok = v1 || v2 || (s.initial_energy >= 0.0 && std::isfinite(s.initial_energy));
+    if (!std::isfinite(s.t) || !std::isfinite(s.external_work) || !initial_ok ||
+        !(s.energy_scale >= 0.0 && std::isfinite(s.energy_scale)) ||
         !s.u.allFinite() || !s.v.allFinite() || !s.a.allFinite())
-        throw protocol::SolverError("bad_config", "structure: the checkpoint holds a time, load work, energy scale, "
+        throw protocol::SolverError("bad_config", "structure: the checkpoint holds a time, load work, energy baseline or scale, "
                                                   "displacement, velocity or acceleration that is not a finite number "
-                                                  "(or a negative energy scale); the file is damaged");
+                                                  "(or a negative energy); the file is damaged");
     return s;
 }
 

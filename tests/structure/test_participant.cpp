@@ -5,6 +5,7 @@
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -196,11 +197,12 @@ TEST_CASE("a damaged or mistimed checkpoint is refused") {
     };
     REQUIRE(message_of(blob, t) == "accepted");
     CHECK(message_of(blob, 0.5).rfind("bad_config: structure: the checkpoint's state is at t = ", 0) == 0);
-    // After the magic (25 bytes) and the counts and fingerprint (24): t, step, load work, energy scale, u.
-    const std::size_t t_at = 25 + 24, scale_at = t_at + 24, u_at = t_at + 32;
+    // After the magic (25 bytes) and the counts and fingerprint (24): t, step, load work, initial energy, energy
+    // scale, u.
+    const std::size_t t_at = 25 + 24, initial_at = t_at + 24, scale_at = t_at + 32, u_at = t_at + 40;
     for (const double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(), -1.0})
-        for (const std::size_t at : {t_at, t_at + 16, scale_at, u_at, u_at + 8}) {
-            if (bad == -1.0 && at != scale_at) continue;  // only the energy scale cannot be negative
+        for (const std::size_t at : {t_at, t_at + 16, initial_at, scale_at, u_at, u_at + 8}) {
+            if (bad == -1.0 && at != scale_at && at != initial_at) continue;  // energies cannot be negative
             CAPTURE(at);
             CAPTURE(bad);
             std::vector<std::uint8_t> damaged = blob;
@@ -209,12 +211,46 @@ TEST_CASE("a damaged or mistimed checkpoint is refused") {
             CHECK(msg.find("not a finite number") != std::string::npos);
             CHECK(msg.find("the file is damaged") != std::string::npos);
         }
-    // A version-1 checkpoint (before the energy scale, 2026-11-27) is still read.
-    std::vector<std::uint8_t> v1 = blob;
-    v1.erase(v1.begin() + static_cast<std::ptrdiff_t>(scale_at), v1.begin() + static_cast<std::ptrdiff_t>(scale_at + 8));
-    REQUIRE(v1[24] == '2');
+    // Versions 1 (no energies, before 2026-11-27) and 2 (the scale alone, the same day) are still read.
+    std::vector<std::uint8_t> v2 = blob, v1 = blob;
+    REQUIRE(blob[24] == '3');
+    v2.erase(v2.begin() + static_cast<std::ptrdiff_t>(initial_at), v2.begin() + static_cast<std::ptrdiff_t>(initial_at + 8));
+    v2[24] = '2';
+    CHECK(message_of(v2, t) == "accepted");
+    v1.erase(v1.begin() + static_cast<std::ptrdiff_t>(initial_at), v1.begin() + static_cast<std::ptrdiff_t>(initial_at + 16));
     v1[24] = '1';
     CHECK(message_of(v1, t) == "accepted");
+}
+
+TEST_CASE("a resumed run checks energy against the run's own start, not the resume time's") {
+    // Started in static equilibrium under a tip load that varies in time (a sine starting at its crest), the
+    // initial energy depends on t0. A review found a resume's INIT rebuilding it at the resume time: the
+    // resumed run stopped at its first step as creating 0.5 of its energy scale. The baseline now travels in
+    // the checkpoint: resumed, the run goes on exactly as the uninterrupted one.
+    Value scene = coupled_scene("linear");
+    set(scene, "damping.model", Value("none"));
+    set(scene, "initial.static_equilibrium", Value(true));
+    Value load = point_load(L, 0.0, 0.0, -100.0);
+    load.as_table_mut()["history"] = Value("sine");
+    load.as_table_mut()["phase"] = Value(std::numbers::pi / 2);
+    load.as_table_mut()["frequency"] = Value(5.0);
+    set(scene, "point_loads", Value(Value::Array{load}));
+    StructureSolver a;
+    a.init(request(scene));
+    Progress p;
+    const auto zero = forces(a, 0.0);
+    double t = 0.0;
+    for (int k = 0; k < 50; ++k) t = a.advance(window(t, 1e-3, 1, zero), p).t;  // to 0.05 s, a quarter period
+    const auto blob = a.checkpoint();
+    StructureSolver b;
+    b.init(request(scene, blob, t));
+    for (int k = 0; k < 50; ++k) {
+        const auto ra = a.advance(window(t, 1e-3, 1, zero), p);
+        const auto rb = b.advance(window(t, 1e-3, 1, zero), p);  // threw "energy created" before
+        t = ra.t;
+        REQUIRE(rb.t == ra.t);
+    }
+    CHECK(a.dynamics().state().u == b.dynamics().state().u);
 }
 
 TEST_CASE("snapshot fields") {

@@ -1,8 +1,9 @@
 #pragma once
 // Byte image of a State for CHECKPOINT / resume. Doubles are stored bit for bit, so a resumed run
-// continues with identical numbers. Layout (little-endian): magic "sphfsi-structure-state-v2",
-// u64 dof count, u64 element count, f64 mesh fingerprint, f64 t, u64 step, f64 external work, f64 energy
-// scale, then u, v, a (dof count f64 each). Version 1 (no energy scale) is still read.
+// continues with identical numbers. Layout (little-endian): magic "sphfsi-structure-state-v3",
+// u64 dof count, u64 element count, f64 mesh fingerprint, f64 t, u64 step, f64 external work, f64 initial
+// energy, f64 energy scale, then u, v, a (dof count f64 each). Versions 1 (neither energy) and 2 (the scale
+// alone) are still read; a run resumed from them goes without the energy check.
 #include <cstdint>
 #include <vector>
 

@@ -20,7 +20,12 @@ struct State {
     std::uint64_t step = 0;
     Vector u, v, a;             // full-DOF displacement, velocity, (algorithmic) acceleration
     double external_work = 0.0; // integral of f_ext . du, trapezoidal per step [J]
-    double energy_scale = 0.0;  // the largest of initial energy + |work| and kinetic + strain so far (check_energy)
+    // check_energy's baseline and scale: the initial state's kinetic + strain energy (NaN: unknown, a run
+    // resumed from a checkpoint written before 2026-11-27, which then goes without the check), and the largest
+    // of initial energy + |work| and kinetic + strain so far. In the state, so that a resumed run (whose INIT
+    // rebuilds the initial state at the resume time) and a restored window check as the uninterrupted run.
+    double initial_energy = 0.0;
+    double energy_scale = 0.0;
 };
 
 struct Energies {
@@ -97,7 +102,6 @@ private:
     Modes modes_;
     double rayleigh_alpha_ = 0, rayleigh_beta_ = 0;
     double dt_accuracy_ = 0;
-    double initial_energy_ = 0;  // kinetic + strain energy of the initial state (reset)
     State state_;
     ReducedSolver solver_;      // effective matrices of the time steps
     double factorized_h_ = -1;  // linear formulation: the step size the factorization belongs to
