@@ -113,12 +113,11 @@ def test_a_resumed_iqn_ils_run_iterates_as_the_uninterrupted_one():
         assert b.attrs["status"] == "completed"
         assert np.array_equal(a["windows/t"][:], b["windows/t"][:]), "the resumed run took different windows"
         assert np.array_equal(a["windows/iterations"][:], b["windows/iterations"][:]), "other iteration counts"
-        assert a["windows/iterations"][:].max() >= 3, "no window reused pairs"
-        for path in ("frames/fluid/position", "frames/structure/displacement"):
-            x, y = a[path][-1], b[path][-1]
-            err = np.abs(x - y).max() / max(np.abs(x).max(), 1e-300)
-            print(f"iqn-ils: {path}: final frames differ by {err:.1e} relative")
-            assert err <= 1e-10, path
+        # Pairs are kept by windows of 3 or more iterations: some before the checkpoint at 0.01 s must have them.
+        before = a["windows/t"][:] <= 0.01 + 1e-12
+        assert a["windows/iterations"][:][before].max() >= 3, "no window before the checkpoint kept pairs"
+        for path in ("frames/fluid/position", "frames/fluid/velocity", "frames/structure/displacement"):
+            assert np.array_equal(a[path][-1], b[path][-1]), path + ": the final frames differ"
 
 
 def fluid_history(out, until):

@@ -20,9 +20,11 @@ void predict(const std::string& kind, const InterfaceState& s, double dt, F64Arr
     // (Until 2026-11-27 vbar stood in for v_{n-1} in Piperno's form: a dt^2 / 4 off under a constant
     // acceleration, first order like the linear predictor.)
     // The velocity is predicted with the same acceleration, v_n + dt a, so that the pair is one the structure
-    // can answer with (d - d_n = dt (v_n + v) / 2, as for the linear predictor's d_n + dt v_n with v_n): the
-    // fluid's solids then move as their velocities say, and an implicit scheme's first iterate is consistent,
-    // which relaxation keeps (x + w r mixes it with the structure's answers). Until 2026-11-27 the velocity
+    // can answer with: d - d_n = dt (v_n + v) / 2, Newmark's relation (generalized-alpha's to about 1e-3 dt^2 a
+    // at rho_inf = 0.9; backward Euler's d - d_n = dt v it misses by dt^2 a / 2, as the old pairing did, and
+    // the linear predictor's d_n + dt v_n with v_n meets). The fluid's solids then move as their velocities
+    // say, and an implicit scheme's first iterate is consistent, which relaxation keeps (x + w r mixes it with
+    // the structure's answers). Until 2026-11-27 the velocity
     // stayed v_n: a review found the displacement-only residual then dominated by that mismatch, and Aitken
     // diverging on a model problem.
     for (std::size_t i = 0; i < d.values.size(); ++i) {
