@@ -334,7 +334,9 @@ TableSchema build() {
     density.choice("method", {"summation", "shepard", "continuity"},
                    "\"summation\": rho = sum m_sum W, with m_sum = rho0 / (sum W on the initial lattice) so that water at rest "
                    "on it is at rho0; \"shepard\": summation divided by the Shepard sum sum V_j W with the volumes "
-                   "V = m_sum / rho of the plain sums (CSPM); \"continuity\": integrate drho/dt = sum m (v_i - v_j) . grad W")
+                   "V = m_sum / rho of the plain sums (CSPM; with pcisph the pressure solve predicts and corrects plain "
+                   "sums all the same, and shepard reaches only the other terms and the record); \"continuity\": "
+                   "integrate drho/dt = sum m (v_i - v_j) . grad W")
         .fallback("continuity");
     density.choice("diffusion", {"none", "molteni", "fourtakas"},
                    "delta-SPH density diffusion in the continuity equation: Molteni & Colagrossi (2009), or "
@@ -401,7 +403,10 @@ TableSchema build() {
     time.number("dt_max", "largest step; 0 = no cap").unit("s").at_least(0).fallback(0.0);
 
     TableSchema& failure = s.table("failure", "bounds beyond which the run stops as diverged");
-    failure.number("min_density_ratio", "smallest rho / rho0 of a fluid particle").at_least(0).fallback(0.01);
+    failure.number("min_density_ratio", "smallest rho / rho0 of a fluid particle; also the floor of a wall or solid "
+                                        "particle's density (0.01 where this is 0)")
+        .at_least(0)
+        .fallback(0.01);
     failure.number("max_density_ratio", "largest rho / rho0 of a fluid particle").greater_than(1).fallback(1.5);
     // Why 1 by default: at |v| >= c0 no pressure wave can warn a particle's neighbours ahead of it, so a
     // weakly compressible model is meaningless there whatever the scene; a runaway particle crosses it within

@@ -164,11 +164,12 @@ const RateFactors* Simulation2D::fill_rate_factors() {
 // A wall pressure below the equation of state's vacuum (p < p_b - B for Tait, -k rho0 for the ideal gas;
 // reachable with negative pressures kept and a small c0) inverts to a density of 0 or below, and 1/rho in the
 // pair terms then made the fluid's accelerations infinite, reported as a non-finite fluid velocity (a review,
-// 2026-11-27). A wall particle's density is held at the fluid's own lower bound, failure.min_density_ratio.
+// 2026-11-27). A wall particle's density is held at the fluid's own lower bound, failure.min_density_ratio,
+// and at 0.01 rho0 where that bound is set to 0.
 double Simulation2D::boundary_density(double p) const {
     if (s_.pressure == PressureModel::Pcisph) return s_.rho0;
     const double rho = s_.pressure == PressureModel::Wcsph ? tait_.density(p) : standard_.density(p);
-    return std::max(rho, s_.min_density_ratio * s_.rho0);
+    return std::max(rho, (s_.min_density_ratio > 0.0 ? s_.min_density_ratio : 0.01) * s_.rho0);
 }
 
 // A coupling window starts: the solid particles take the new window's kinematics, and the rates that start

@@ -59,8 +59,9 @@ SolidSection::SolidSection(std::string name, std::vector<Quad> cells, const std:
         for (std::size_t k = 0; k < 4; ++k) {
             const Quad& c = cells_[i];
             const auto e = edge(c, k);
-            if (e.first == e.second || uses[e] != 1) continue;
-            faces_.push_back({c[k], c[(k + 1) % 4]});
+            const bool point = e.first == e.second;
+            if (!point && uses[e] != 1) continue;
+            if (!point) faces_.push_back({c[k], c[(k + 1) % 4]});
             face_edges_[i] = static_cast<std::uint8_t>(face_edges_[i] | (1u << k));
         }
     for (std::uint8_t f : face_edges_) any_middle_ = any_middle_ || (f & 0b0101) == 0b0101 || (f & 0b1010) == 0b1010;

@@ -185,6 +185,13 @@ TEST_SUITE("solid_section") {
         CHECK_FALSE(step(len - 0.4 * dp, 0.6 * dp, len - 0.4 * dp, 0.4 * dp));
         CHECK(step(len - 0.6 * dp, 0.6 * dp, len - 0.6 * dp, 0.4 * dp));
         CHECK_FALSE(step(len + 0.1 * dp, 0.6 * dp, len + 0.1 * dp, 0.4 * dp));
+        // An end drawn to a point (both end vertices at the tip; a second review: it was not counted an end, and
+        // water turning round a pointed tip would have stopped the run) has the margin too.
+        Mesh pointed = rectangle(0.0, 0.0, len, dp, 40, 1);
+        pointed.vertices[40] = pointed.vertices[81] = Vec2{{len, 0.5 * dp}};
+        const auto tip = section(pointed);
+        CHECK_FALSE(tip.crossed_middle(Vec2{{len - 0.4 * dp, 0.6 * dp}}, Vec2{{len - 0.4 * dp, 0.4 * dp}}));
+        CHECK(tip.crossed_middle(Vec2{{len - 0.6 * dp, 0.6 * dp}}, Vec2{{len - 0.6 * dp, 0.4 * dp}}));
         // An end the water cannot touch (set into a wall at x = 0) has no such margin.
         const auto walled = section(rectangle(0.0, 0.0, len, dp, 40, 1), 0.0, [](const Vec2& p) { return p[0] > 1e-12; });
         CHECK(walled.crossed_middle(Vec2{{0.2 * dp, 0.6 * dp}}, Vec2{{0.2 * dp, 0.4 * dp}}));

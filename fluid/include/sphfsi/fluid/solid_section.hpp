@@ -11,10 +11,10 @@
 // it is at no face: deeper than L below every face, or, across a section thinner than 2 L + dp, within dp/2
 // of the middle and more than dp/2 past the face (a step moves a particle a small fraction of a spacing, so
 // one passing through lands in that band; without the repulsive force centres sit up to 0.43 dp past a
-// surface). A section no thicker than dp has no such band (crossed_middle, below, covers it). For a box
-// inside the tank this is through_obstacle (a review compared 160,000 points in 400 boxes of 1 - 25 cells);
-// unlike it, the section ends at the tank's wall surfaces (a centre squeezing under a gate standing on the
-// floor, through the floor's own layers, is caught only below them, by the floor's check).
+// surface). A section no thicker than dp has no such band (crossed_middle, below, covers one meshed a cell
+// thick). For a box inside the tank this is through_obstacle (a review compared 160,000 points in 400 boxes
+// of 1 - 25 cells); unlike it, the section ends at the tank's wall surfaces (a centre squeezing under a gate
+// standing on the floor, through the floor's own layers, is caught only below them, by the floor's check).
 //
 // Why these choices (reviews of a first version, reverted, and of this one found each of them wrong there):
 // - Faces are the edges no two cells share, found by the vertices' reference positions, so a mesh of several
@@ -37,8 +37,9 @@
 // two edges is the part's middle there; a step whose path (x - dt v at t - dt to x at t, against the middle
 // where it was at each of those times) crosses it has gone from one face past the middle, where the part's
 // own solid particles sit. Within dp/2 of an end of the line that is a face the water can touch (a free
-// end) it is not counted: water turning round the end crosses there. A part meshed with several cells
-// through its thickness has no such cell; it is thick enough for the depth rule.
+// end, or an end drawn to a point) it is not counted: water turning round the end crosses there. A part
+// meshed with several cells through its thickness has no such cell and is left to the depth rule alone,
+// which misses water through it when it is no thicker than dp (no mesh we publish is: docs/coupling.md).
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -95,8 +96,9 @@ private:
     std::string name_;
     std::vector<Quad> cells_;
     std::vector<std::array<std::int32_t, 2>> faces_;  // vertex index pairs of the edges no two cells share
-    // Per cell, bit k: its edge k (vertex k to k + 1) is a face. A cell with edges k and k + 2 both faces
-    // spans the thickness across them (its middle line joins the midpoints of edges k + 1 and k + 3).
+    // Per cell, bit k: its edge k (vertex k to k + 1) is a face, or drawn to a point (a pointed end, an end
+    // for crossed_middle though not a face). A cell with edges k and k + 2 so marked spans the thickness
+    // across them (its middle line joins the midpoints of edges k + 1 and k + 3).
     std::vector<std::uint8_t> face_edges_;
     bool any_middle_ = false;  // some cell spans the thickness
     Vertices vertices_;
