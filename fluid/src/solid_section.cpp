@@ -250,7 +250,8 @@ bool SolidSection::crossed_middle(const Vec2& from, const Vec2& to) const {
             const double len = norm(e);
             if (len == 0.0) continue;
             const double along = dot(p - a, e) / len;
-            // Half a spacing's margin at an end that is a face the water can touch (a free end).
+            // Half a spacing's margin at an end that is a face the water can touch (a free end, or one drawn to a
+            // point).
             auto margin = [&](unsigned edge, const Vec2& at) {
                 return (faces & (1u << edge)) && (!touchable_ || touchable_(at)) ? 0.5 * dp_ : 0.0;
             };

@@ -56,9 +56,9 @@ void check_inside_tank(const protocol::InterfaceMesh& mesh, const FluidSettings&
             char buf[400];
             std::snprintf(buf, sizeof buf,
                           "the structure's interface mesh has vertex %llu at (%.6g, %.6g) m, outside the tank and its walls "
-                          "(x in [%.6g, %.6g], y in [%.6g, %.6g] m, a periodic axis's period alone): fluid.tank and the "
-                          "structure's geometry disagree",
-                          static_cast<unsigned long long>(v), x, y, x_lo, x_hi, y_lo, y_hi);
+                          "(x in [%.6g, %.6g], y in [%.6g, %.6g] m%s): fluid.tank and the structure's geometry disagree",
+                          static_cast<unsigned long long>(v), x, y, x_lo, x_hi, y_lo, y_hi,
+                          s.periodic[0] || s.periodic[1] ? ", a periodic axis's period alone" : "");
             throw SolverError("bad_config", buf);
         }
     }

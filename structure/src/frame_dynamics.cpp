@@ -205,9 +205,9 @@ void FrameDynamics::check_bounded(const Vector& u, double t) const {
 // then explosively, and a run could complete with 19 times the loads' work as kinetic and strain energy (a
 // review, 2026-11-27: beam_only, P L^2 / EI = 2, Newmark at 5.0e-4 s; docs/validation.md "Structure step").
 // The scale is the largest energy the structure has had or been given so far, max(initial energy + |load
-// work|, kinetic + strain): the motion's energy, counted once. Not
-// the present one: a structure under a sudden constant load comes back to its start at rest every period,
-// where the present energies are all near zero and round-off would be divided by nothing. It is kept in the
+// work|, kinetic + strain): the motion's energy, counted once. Not the present one: a structure under a
+// sudden constant load comes back to its start at rest every period, where the present energies are all
+// near zero and round-off would be divided by nothing. It is kept in the
 // state (and the checkpoint), with the baseline, so a resumed run checks as the uninterrupted one (a review
 // found a resume's INIT rebuilding the baseline at the resume time, which stopped a resumed run at once).
 // Measured with the default: coupled runs of the scenes reach 0.005 - 0.031 of the scale (the elastic gate
@@ -271,6 +271,7 @@ StepReport FrameDynamics::step(double h, const Vector& extra) {
     if (af != 0.0) rest += af * (D * vn + internal_force(un) - fe0);
 
     Vector u = un, v1, a1, fint;
+    double strain = 0.0;  // at the last evaluated u, which the step ends at (check_energy)
     SparseMatrix Kt, Kd;  // Kd: the deformation damping's tangent
     // The elements' deformation at the step's start, once: every Newton iterate measures from it.
     const std::vector<Eigen::Vector3d> deformed = turning_damping() ? corotational_deformations(model_, un)
@@ -279,7 +280,7 @@ StepReport FrameDynamics::step(double h, const Vector& extra) {
         const Vector du = u - un;
         a1 = c.c0 * du - c.c1 * vn - c.c2 * an;
         v1 = c.c3 * du + c.c4 * vn + c.c5 * an;
-        fint = internal_force(u, want_tangent ? &Kt : nullptr);
+        fint = internal_force(u, want_tangent ? &Kt : nullptr, &strain);
         Vector damping = (1.0 - af) * (D * v1);
         if (turning_damping())
             damping += rayleigh_beta_ * corotational_deformation_damping(model_, u, deformed, h, want_tangent ? &Kd : nullptr);
@@ -352,7 +353,7 @@ StepReport FrameDynamics::step(double h, const Vector& extra) {
     state_.a = a1;
     state_.t += h;
     ++state_.step;
-    check_energy(energies());
+    check_energy(Energies{0.5 * state_.v.dot(M_ * state_.v), strain, state_.external_work});
     return report;
 }
 

@@ -50,7 +50,6 @@ public:
     explicit Aitken(double w0) : w0_(w0) {}
     void begin_window(SecantHistory&) override { have_prev_ = false; }
     Vec next(const Vec& x, const Vec& xt, Eigen::Index np) override;
-    double factor() const { return w_; }  // the factor of the last update
 
 private:
     double w0_, w_ = 0.0;
