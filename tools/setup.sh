@@ -8,7 +8,7 @@ packages=(
   build-essential cmake pkg-config ccache git
   libeigen3-dev libzmq3-dev cppzmq-dev libmsgpack-cxx-dev libhdf5-dev
   doctest-dev libtomlplusplus-dev
-  python3 python3-h5py python3-matplotlib python3-zmq python3-msgpack python3-numpy
+  python3 python3-h5py python3-matplotlib python3-zmq python3-msgpack python3-numpy python3-scipy
 )
 
 missing=()

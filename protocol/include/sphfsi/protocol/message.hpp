@@ -12,7 +12,7 @@
 namespace sphfsi::protocol {
 
 // The version this build speaks, and the oldest it still accepts. Bump kProtocolVersion on any change
-// to a message's fields or meaning; see "Versioning" in docs/protocol.md.
+// to a message's fields or meaning; see section 3.1, "Version negotiation", in docs/protocol.md.
 inline constexpr std::uint32_t kProtocolVersion = 2;
 inline constexpr std::uint32_t kOldestSupportedVersion = 1;
 
