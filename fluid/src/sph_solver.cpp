@@ -402,6 +402,10 @@ protocol::Fields SphSolver::snapshot() {
 
 std::vector<std::uint8_t> SphSolver::checkpoint() {
     require_init();
+    // A failure found at the last window's end (next_step_wanted) is the run's next event: a checkpoint of
+    // that state would resume into it without its message (or be refused as damaged, with NaN rates), so the
+    // request is answered with the failure itself (a review, 2026-11-27).
+    if (step_floor_failure_) throw *step_floor_failure_;
     ByteWriter w;
     w.put(checkpoint_magic);
     w.put_vector(start_displacement_);  // before the particles: a resume lays them out around it (init)

@@ -111,8 +111,11 @@ TEST_SUITE("failure") {
         // is reached at a window's end. That window is whole: it is answered (the coordinator records it and
         // its frame), and the next ADVANCE stops before its first step. The reply had thrown instead, and the
         // frame at the window's end was lost (a review, 2026-11-27).
+        // A checkpoint asked for between that reply and the next ADVANCE is answered with the same failure: the
+        // state would resume into it without its message (a review, 2026-11-27).
         auto s = start(with(wcsph(dam_break(0.1 / 16)), {{"time.dt_min", 1.8e-4}}));
         sphfsi::protocol::Progress progress;
+        std::string checkpoint_refused;
         bool failed = false;
         double dt = s->simulation().stable_dt();
         for (int k = 0; k < 1000 && !failed; ++k) {
@@ -124,6 +127,11 @@ TEST_SUITE("failure") {
             try {
                 dt = s->advance(req, progress).dt_wanted;
                 CHECK(dt >= 1.8e-4);
+                try {
+                    s->checkpoint();
+                } catch (const sphfsi::protocol::SolverError& e) {
+                    checkpoint_refused = e.what();
+                }
             } catch (const sphfsi::protocol::SolverError& e) {
                 failed = true;
                 CHECK(std::string(e.what()).find("below the floor") != std::string::npos);
@@ -132,6 +140,7 @@ TEST_SUITE("failure") {
             }
         }
         CHECK(failed);
+        CHECK(checkpoint_refused.find("below the floor") != std::string::npos);
     }
 
     TEST_CASE("a density bound is enforced") {
