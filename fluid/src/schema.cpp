@@ -382,8 +382,9 @@ TableSchema build() {
         .greater_than(0).less_than(2).fallback(1.5);
     surface.vector("wind_shear", 2, "shear stress applied to the free surface (wind): each free-surface particle "
                                     "carries it on its share of the surface (dp on the initial lattice; measured "
-                                    "along the surface as the layer rearranges), so the total force is tau times "
-                                    "the surface length").unit("Pa")
+                                    "along the surface as the layer rearranges, the surface mirrored at the tank's "
+                                    "walls where it meets them), so the total force is tau times the surface "
+                                    "length (0.9995 of it on the wind basin's initial lattice)").unit("Pa")
         .fallback(Value(Value::Array{Value(0.0), Value(0.0)}));
 
     TableSchema& time = s.table("time", "time stepping");

@@ -1,7 +1,7 @@
 #pragma once
 // A shear stress applied to the free surface (wind, from the shallow-lake paper): each free-surface fluid
 // particle carries the stress on the piece of surface it represents, so the total force is tau times the
-// surface length (area in 3D), however the surface layer is arranged.
+// surface length (area in 3D), however the surface layer is arranged (to the share's quadrature accuracy).
 //
 // Which piece. On the initial lattice every surface particle represents dp^(Dim-1) of surface, and that is
 // all the first version assumed. A surface under a sustained stress does not stay a lattice: in a closed
@@ -10,7 +10,7 @@
 // scenarios/wind_basin.toml): the free-surface particles grew from 200 to 252 by t = 5 s (120 over the
 // middle 100 dp, 1.36 per dp in places), and with tau dp each the wind's force grew with them. With the
 // shares below, the same run had 259 surface particles at t = 5 s whose shares add up to 0.390 m of the
-// 0.4 m surface (0.400 m at t = 0).
+// 0.4 m surface (0.400 m at t = 0; before the wall images below, 0.4012 m: a review, 2026-11-27).
 //
 // So a surface particle's share is measured, not assumed: 1 / (the number of surface particles per unit
 // surface around it), the number density taken along the surface, i.e. with the neighbours' offsets
@@ -19,13 +19,30 @@
 // initial lattice: the share is exactly dp^(Dim-1) there, and the profile's normalising constant cancels.
 // The outward normal is the direction of minus the colour gradient, -sum_j grad W_ij over every neighbour,
 // walls and solids included (so a wall is not a surface).
+//
+// Where the surface meets a tank wall it ends, and its last particles would count surface neighbours on one
+// side only: on the initial lattice the particle next to a wall took 1.29 dp and the next one 1.02 dp (the
+// basin's total 0.4012 m for 0.4 m; a review, 2026-11-27). The density sum therefore adds the mirror images,
+// across each tank wall's surface plane, of the surface particles near it (the particle itself included), as
+// if the surface went on beyond the wall: exactly dp on the lattice again. Only across a wall the surface
+// meets, one whose normal lies within 45 degrees of the surface's tangent: a thin layer running along the
+// floor has the floor below it, not at its end, and images there would halve its shares. Obstacles and
+// coupled structures piercing the surface get no images.
 #include <cmath>
 #include <cstdint>
+#include <utility>
+#include <vector>
 
 #include "sphfsi/fluid/cell_grid.hpp"
 #include "sphfsi/fluid/particles.hpp"
 
 namespace sphfsi::fluid {
+
+// A tank wall's surface: the plane where coordinate `axis` is `at`.
+struct WallPlane {
+    int axis = 0;
+    double at = 0.0;
+};
 
 template <int Dim>
 struct SurfaceStress {
@@ -33,6 +50,7 @@ struct SurfaceStress {
     float threshold = 0.75f * Dim; // divergence of position below which a fluid particle is on the surface
     double h = 0.0;                // smoothing length: the surface weight reaches 2h
     double lattice_share = 0.0;    // dp^(Dim-1) times the surface weight summed over the initial lattice
+    std::vector<WallPlane> walls;  // the tank's wall surfaces (mirror images of the surface near them)
     bool on() const { return norm2(tau) > 0.0; }
 };
 
@@ -46,9 +64,11 @@ inline double surface_weight(double q) {
 // dp^(Dim-1) times the sum of the surface weight over a flat surface lattice of spacing dp (Dim - 1
 // dimensions), the particle itself included.
 template <int Dim>
-SurfaceStress<Dim> make_surface_stress(const Vec<Dim>& tau, double threshold, double h, double dp) {
+SurfaceStress<Dim> make_surface_stress(const Vec<Dim>& tau, double threshold, double h, double dp,
+                                       std::vector<WallPlane> walls = {}) {
     SurfaceStress<Dim> s;
     s.tau = tau;
+    s.walls = std::move(walls);
     s.threshold = static_cast<float>(threshold);
     s.h = h;
     const int n = static_cast<int>(std::ceil(2.0 * h / dp));
@@ -88,15 +108,28 @@ void apply_surface_stress(ParticleStore<Dim>& P, const CellGrid<Dim>& grid, cons
                 }
             const double n2 = norm2(normal);
             const V unit = n2 > 0.0 ? normal * (1.0 / std::sqrt(n2)) : V{};  // none: a lone particle
-            double density = surface_weight(0.0);
-            for (int r = 0; r < nr; ++r)
-                for (std::uint32_t j = ranges[r].begin; j < ranges[r].end; ++j) {
-                    if (j == i || !on_surface(j)) continue;
-                    const V dx = xi - (P.x[j] + ranges[r].shift);
-                    if (norm2(dx) >= reach2) continue;
-                    const V along = dx - unit * dot(dx, unit);
-                    density += surface_weight(std::sqrt(norm2(along)) * inv_h);
+            double density = 0.0;
+            auto count = [&](const V& xj) {  // a surface particle (or image) at xj
+                const V dx = xi - xj;
+                if (norm2(dx) >= reach2) return;
+                const V along = dx - unit * dot(dx, unit);
+                density += surface_weight(std::sqrt(norm2(along)) * inv_h);
+            };
+            // Its images across the walls within reach of xi (only those can be within reach).
+            auto count_with_images = [&](const V& xj) {
+                count(xj);
+                for (const WallPlane& w : s.walls) {
+                    const auto k = static_cast<std::size_t>(w.axis);
+                    if (std::abs(xi[k] - w.at) >= 2.0 * s.h || std::abs(unit[k]) > std::sqrt(0.5)) continue;
+                    V image = xj;
+                    image[k] = 2.0 * w.at - xj[k];
+                    count(image);
                 }
+            };
+            count_with_images(xi);
+            for (int r = 0; r < nr; ++r)
+                for (std::uint32_t j = ranges[r].begin; j < ranges[r].end; ++j)
+                    if (j != i && on_surface(j)) count_with_images(P.x[j] + ranges[r].shift);
             P.a[i] += s.tau * (s.lattice_share / (density * mass));
         }
     });
