@@ -80,9 +80,10 @@ SecantHistory unpack_secants(const msgpack::object& o, std::size_t nd) {
     for (std::uint32_t k = 0; k < windows.size; ++k) {
         const auto& w = array_of(windows.ptr[k], 2, 2, "an IQN-ILS secant window");
         SecantWindow out;
-        std::size_t length = nd;
-        for (auto* columns : {&out.V, &out.W}) {
-            const auto& list = array_of(w.ptr[columns == &out.V ? 0 : 1], 1, UINT32_MAX, "IQN-ILS secant columns");
+        for (std::uint32_t side = 0; side < 2; ++side) {  // V, then W: twice as long (velocities too)
+            auto& columns = side == 0 ? out.V : out.W;
+            const std::size_t length = (side + 1) * nd;
+            const auto& list = array_of(w.ptr[side], 1, UINT32_MAX, "IQN-ILS secant columns");
             for (std::uint32_t j = 0; j < list.size; ++j) {
                 const auto& bin = bin_of(list.ptr[j], "an IQN-ILS secant column");
                 if (bin.size != length * sizeof(double))
@@ -90,9 +91,8 @@ SecantHistory unpack_secants(const msgpack::object& o, std::size_t nd) {
                                              std::to_string(length * sizeof(double)) + " for this interface");
                 std::vector<double> c(length);
                 if (length > 0) std::memcpy(c.data(), bin.ptr, bin.size);
-                columns->push_back(std::move(c));
+                columns.push_back(std::move(c));
             }
-            length = 2 * nd;
         }
         if (out.V.size() != out.W.size()) throw std::runtime_error("an IQN-ILS secant window has unequal V and W columns");
         h.push_back(std::move(out));

@@ -184,16 +184,21 @@ bool SolidSection::at_a_face(const Vec2& x, const Vec2& foot, double depth, cons
 // the parallel check, for every centre inside the section, every step.
 const std::vector<std::uint32_t>& SolidSection::faces_near(const Vec2& x, int bins) const {
     thread_local std::vector<std::uint32_t> near;
-    near.clear();
     const auto b = bin_of(x);
-    for (int y = std::max(b[1] - bins, 0); y <= std::min(b[1] + bins, ny_ - 1); ++y)
-        for (int bx = std::max(b[0] - bins, 0); bx <= std::min(b[0] + bins, nx_ - 1); ++bx) {
-            const std::size_t k = static_cast<std::size_t>(y) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(bx);
-            near.insert(near.end(), face_bins_.items.begin() + face_bins_.start[k], face_bins_.items.begin() + face_bins_.start[k + 1]);
-        }
-    std::sort(near.begin(), near.end());
-    near.erase(std::unique(near.begin(), near.end()), near.end());
+    gather(face_bins_, {b[0] - bins, b[1] - bins}, {b[0] + bins, b[1] + bins}, near);
     return near;
+}
+
+// The items of the bins from b0 to b1 (corners included, clamped to the grid), each once, into `out`.
+void SolidSection::gather(const Bins& bins, std::array<int, 2> b0, std::array<int, 2> b1, std::vector<std::uint32_t>& out) const {
+    out.clear();
+    for (int y = std::max(b0[1], 0); y <= std::min(b1[1], ny_ - 1); ++y)
+        for (int x = std::max(b0[0], 0); x <= std::min(b1[0], nx_ - 1); ++x) {
+            const std::size_t k = static_cast<std::size_t>(y) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(x);
+            out.insert(out.end(), bins.items.begin() + bins.start[k], bins.items.begin() + bins.start[k + 1]);
+        }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
 }
 
 // Whether a surface point lies within `tol` of x (on a face counts), from the faces of the 3 x 3 bins around
@@ -222,16 +227,8 @@ bool SolidSection::crossed_middle(const Vec2& from, const Vec2& to) const {
         hi[k] = std::max(from[k], to[k]) + bin_;
         if (!(hi[k] >= lo_[k] && lo[k] <= hi_[k])) return false;
     }
-    const auto b0 = bin_of(lo), b1 = bin_of(hi);
     thread_local std::vector<std::uint32_t> near;
-    near.clear();
-    for (int y = b0[1]; y <= b1[1]; ++y)
-        for (int x = b0[0]; x <= b1[0]; ++x) {
-            const std::size_t k = static_cast<std::size_t>(y) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(x);
-            near.insert(near.end(), cell_bins_.items.begin() + cell_bins_.start[k], cell_bins_.items.begin() + cell_bins_.start[k + 1]);
-        }
-    std::sort(near.begin(), near.end());
-    near.erase(std::unique(near.begin(), near.end()), near.end());
+    gather(cell_bins_, bin_of(lo), bin_of(hi), near);
     for (std::uint32_t i : near) {
         const Quad& c = cells_[i];
         const unsigned faces = face_edges_[i];

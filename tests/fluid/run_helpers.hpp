@@ -2,7 +2,10 @@
 // Driving the fluid solver through its participant interface, as the coordinator would.
 #include <cmath>
 #include <functional>
+#include <cstdint>
 #include <memory>
+#include <utility>
+#include <vector>
 
 #include "sphfsi/fluid/sph_solver.hpp"
 
@@ -13,6 +16,22 @@ inline std::unique_ptr<sphfsi::fluid::SphSolver> start(const sphfsi::Value& conf
     sphfsi::protocol::InitRequest req;
     req.config = config;
     req.t0 = t0;
+    solver->init(req);
+    return solver;
+}
+
+// A fluid around an interface mesh, as INIT starts it: with the structure's start state, or resumed from a
+// checkpoint.
+inline std::unique_ptr<sphfsi::fluid::SphSolver> start_around(const sphfsi::Value& config,
+                                                             const sphfsi::protocol::InterfaceMesh& mesh,
+                                                             sphfsi::protocol::Fields interface_state = {},
+                                                             std::vector<std::uint8_t> state = {}) {
+    auto solver = std::make_unique<sphfsi::fluid::SphSolver>();
+    sphfsi::protocol::InitRequest req;
+    req.config = config;
+    req.interface = mesh;
+    req.interface_state = std::move(interface_state);
+    req.state = std::move(state);
     solver->init(req);
     return solver;
 }

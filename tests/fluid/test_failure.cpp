@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <memory>
 #include <optional>
 #include <string>
 
@@ -61,16 +60,7 @@ sphfsi::protocol::InterfaceMesh standing_plate(int rows) {
 // `structure`: a coupled structure's interface mesh in the tank.
 std::string thrown(Value f, double dt, std::optional<sphfsi::protocol::InterfaceMesh> structure = std::nullopt) {
     f = with(f, {{"gravity", vec2(100.0, 0.0)}, {"threads", 1}, {"density.method", "summation"}});
-    std::unique_ptr<sphfsi::fluid::SphSolver> s;
-    if (structure) {
-        s = std::make_unique<sphfsi::fluid::SphSolver>();
-        sphfsi::protocol::InitRequest init;
-        init.config = f;
-        init.interface = std::move(*structure);
-        s->init(init);
-    } else {
-        s = start(f);
-    }
+    auto s = structure ? start_around(f, *structure) : start(f);
     sphfsi::protocol::Progress progress;
     sphfsi::protocol::AdvanceRequest req;
     req.dt = dt;

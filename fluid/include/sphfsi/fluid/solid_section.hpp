@@ -88,6 +88,7 @@ private:
     bool surface_within(const Vec2& x, double tol) const;
     double reach() const { return 2.0 * layers_ + dp_; }  // the farthest a face can matter: 2 L + dp
     const std::vector<std::uint32_t>& faces_near(const Vec2& x, int bins) const;
+    void gather(const Bins& bins, std::array<int, 2> b0, std::array<int, 2> b1, std::vector<std::uint32_t>& out) const;
     bool at_a_face(const Vec2& x, const Vec2& foot, double depth, const std::vector<std::uint32_t>& near) const;
     std::array<int, 2> bin_of(const Vec2& x) const;
     template <class Box>
