@@ -88,6 +88,21 @@ TEST_SUITE("scene") {
         }
     }
 
+    TEST_CASE("the gate moves from t = 0 on: the first step's walls carry its speed, and it stops at its travel") {
+        // The step's forces are evaluated at its start, so a gate that reported rest at t = 0 would hold its
+        // walls still for the whole first step of its rise.
+        const sphfsi::fluid::GateLift lift{2.0, 0.2};
+        double offset = -1.0, velocity = -1.0;
+        lift.at(-1e-9, offset, velocity);
+        CHECK((offset == 0.0 && velocity == 0.0));
+        lift.at(0.0, offset, velocity);
+        CHECK((offset == 0.0 && velocity == 2.0));
+        lift.at(0.05, offset, velocity);
+        CHECK((offset == doctest::Approx(0.1).epsilon(1e-15) && velocity == 2.0));
+        lift.at(0.1, offset, velocity);
+        CHECK((offset == 0.2 && velocity == 0.0));
+    }
+
     TEST_CASE("a dam break against an obstacle: no particle enters a wall; the step log has a line per step") {
         const std::string log = "fluid_test_step_log.csv";
         std::remove(log.c_str());

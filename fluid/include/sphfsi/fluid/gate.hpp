@@ -27,12 +27,13 @@ namespace sphfsi::fluid {
 std::vector<Vec<2>> gate_particles(const FluidSettings& s);
 
 // The gate's rise at time t (t0 = 0): offset and velocity along +y (no acceleration: it starts and stops at
-// once, moving along its own faces).
+// once, moving along its own faces). At t = 0 itself the gate already moves: the forces of the first step
+// are evaluated at its start, and that step is the first of the rise, so its walls must carry the speed.
 struct GateLift {
     double speed = 0.0, travel = 0.0;
     void at(double t, double& offset, double& velocity) const {
         const double t_stop = travel / speed;
-        if (t <= 0.0) {
+        if (t < 0.0) {
             offset = 0.0, velocity = 0.0;
         } else if (t < t_stop) {
             offset = speed * t, velocity = speed;
