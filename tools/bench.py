@@ -33,11 +33,15 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 def run_measured(argv, env=None):
     """Runs argv to completion; returns its stdout and the rusage of that process."""
-    p = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-    # Read the output fully, then reap with wait4 (the exit status and rusage of this child alone).
-    out = p.stdout.read()
-    err = p.stderr.read()
-    _, status, usage = os.wait4(p.pid, 0)
+    # stderr goes to a file: read from a second pipe after stdout, a child writing more than a pipe's buffer
+    # there would block, and the benchmark with it. Then reap with wait4 (the exit status and rusage of this
+    # child alone).
+    with tempfile.TemporaryFile(mode="w+") as err_file:
+        p = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=err_file, text=True, env=env)
+        out = p.stdout.read()
+        _, status, usage = os.wait4(p.pid, 0)
+        err_file.seek(0)
+        err = err_file.read()
     p.returncode = os.waitstatus_to_exitcode(status)
     if p.returncode:
         sys.exit(f"{' '.join(argv)} failed ({p.returncode}):\n{err}")

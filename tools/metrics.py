@@ -13,7 +13,6 @@ usage:
 e.g.
   tools/metrics.py out/beam watchpoint_mean_after watchpoint='"tip"' t_start=0.3 exact=-2.381e-4
 """
-import csv
 import math
 import os
 import sys
@@ -74,6 +73,11 @@ class Context:
         return path if os.path.isabs(path) else os.path.normpath(os.path.join(self.base_dir, path))
 
 
+# Parameters that are names or paths: on the command line their text is taken as typed (quotes optional).
+TEXT_PARAMS = {"watchpoint", "component", "data_csv", "reference_csv", "participant", "key", "column", "reduce",
+               "source", "mode"}
+
+
 def check_params(name, params):
     """Raises MetricError for an unknown metric, an unknown parameter or a missing one."""
     if name not in METRICS:
@@ -103,6 +107,26 @@ def compute(name, run_dir, params, context):
 # Reading helpers
 
 
+def watchpoint_rows(path):
+    """The whole rows of a watchpoints.csv as dicts of time, name, x, y, dx, dy (floats but name), by the
+    coordinator's own rule on resume (coordinator/src/watchpoints.cpp): a row ends in a newline, has six
+    fields and numbers where numbers belong, and reading stops at the first one that does not (a kill can
+    cut the last row short; half a number would be a wrong value, not a missing one)."""
+    with open(path, newline="") as f:
+        lines = f.read().split("\n")
+    rows = []
+    for line in lines[1:-1]:  # the header, and after the last newline nothing or a row cut short
+        fields = line.split(",")
+        if len(fields) != 6:
+            break
+        try:
+            t, x, y, dx, dy = (float(fields[i]) for i in (0, 2, 3, 4, 5))
+        except ValueError:
+            break
+        rows.append({"time": t, "name": fields[1], "x": x, "y": y, "dx": dx, "dy": dy})
+    return rows
+
+
 def watchpoint_series(run_dir, name, component):
     """(t, value) of one watchpoint from watchpoints.csv; component is dx, dy, x, y or magnitude
     (sqrt(dx^2 + dy^2)). A time written twice (a resumed run) keeps its last row."""
@@ -111,19 +135,12 @@ def watchpoint_series(run_dir, name, component):
         raise MetricError(f"{path}: no such file (the scene needs a [[watchpoint]])")
     rows = {}
     names = set()
-    with open(path) as f:
-        for r in csv.DictReader(f):
-            names.add(r["name"])
-            if r["name"] != name:
-                continue
-            t = float(r["time"])
-            if component == "magnitude":
-                v = math.hypot(float(r["dx"]), float(r["dy"]))
-            elif component in ("dx", "dy", "x", "y"):
-                v = float(r[component])
-            else:
-                raise MetricError(f"component {component!r}; allowed: dx, dy, x, y, magnitude")
-            rows[t] = v
+    if component not in ("dx", "dy", "x", "y", "magnitude"):
+        raise MetricError(f"component {component!r}; allowed: dx, dy, x, y, magnitude")
+    for r in watchpoint_rows(path):
+        names.add(r["name"])
+        if r["name"] == name:
+            rows[r["time"]] = math.hypot(r["dx"], r["dy"]) if component == "magnitude" else r[component]
     if not rows:
         raise MetricError(f"no watchpoint {name!r} in {path} (has: {', '.join(sorted(names)) or 'none'})")
     t = np.array(sorted(rows))
@@ -217,7 +234,7 @@ def watchpoint_mean_after(run_dir, params, context):
 def watchpoint_vs_reference_run(run_dir, params, context):
     """Difference of a watchpoint time series from the sweep's reference run (e.g. the finest one).
 
-    Times: the times present in both series (matching to 1e-9 relative; every run has a window ending on
+    Times: the times present in both series (matching within 1e-9 max(1 s, t_end); every run has a window ending on
     each output time, so these are at least the frame times); if fewer than `min_common`, the reference is
     linearly interpolated at this run's times instead. Only times in [t_start, t_end] (default: the
     overlap of both runs) count. With e = u - u_ref and S = max |u_ref| over those times:
@@ -720,6 +737,9 @@ def main(argv):
     ref = None
     if "--reference" in argv:
         i = argv.index("--reference")
+        if i + 1 >= len(argv):
+            print("metrics: --reference needs a run folder after it", file=sys.stderr)
+            return 2
         ref = argv[i + 1]
         del argv[i:i + 2]
     if len(argv) < 2:
@@ -728,6 +748,9 @@ def main(argv):
     run_dir, name, params = argv[0], argv[1], {}
     for a in argv[2:]:
         k, _, v = a.partition("=")
+        if k in TEXT_PARAMS and not v.startswith(('"', "'")):
+            params[k] = v  # a name or path as typed: watchpoint=true is the watchpoint "true", not a bool
+            continue
         try:
             params[k] = tomllib.loads(f"v = {v}")["v"]
         except tomllib.TOMLDecodeError:

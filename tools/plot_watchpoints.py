@@ -6,7 +6,6 @@ usage: /usr/bin/python3 tools/plot_watchpoints.py RUN/watchpoints.csv [OUT.png] 
 --ref overlays reference points (a CSV with '#' comment lines and two columns: t and the component,
 e.g. scenarios/reference/antoci2007_gate_tip_dx.csv) on the named watchpoint's component.
 """
-import csv
 import os
 import sys
 from collections import defaultdict
@@ -17,7 +16,7 @@ matplotlib.use("Agg")  # files only; no display needed
 import matplotlib.pyplot as plt  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from metrics import MetricError, read_reference_curve  # noqa: E402
+from metrics import MetricError, read_reference_curve, watchpoint_rows  # noqa: E402
 
 
 def read_reference(path):
@@ -40,12 +39,11 @@ def main():
     src = args[0]
     dst = args[1] if len(args) > 1 else src.rsplit(".", 1)[0] + ".png"
     series = defaultdict(lambda: ([], [], []))
-    with open(src) as f:
-        for row in csv.DictReader(f):
-            t, dx, dy = series[row["name"]]
-            t.append(float(row["time"]))
-            dx.append(float(row["dx"]))
-            dy.append(float(row["dy"]))
+    for row in watchpoint_rows(src):  # whole rows only: a killed run's last one may be cut short
+        t, dx, dy = series[row["name"]]
+        t.append(row["time"])
+        dx.append(row["dx"])
+        dy.append(row["dy"])
     if not series:
         sys.exit(f"{src}: no watchpoints")
     fig, ax = plt.subplots(figsize=(7, 4))

@@ -22,7 +22,8 @@ usage: /usr/bin/python3 tools/sweep.py SWEEP.toml [--jobs N] [--out DIR] [--only
   --no-charts     skip the charts named in [chart]
 
 Exit status: 0 done (failed runs are results, not errors), 1 --check found a regression, 2 a mistake in
-the sweep file or the command line, 130 interrupted (the runs in progress are stopped with SIGINT).
+the sweep file or the command line, 3 a bisection's reference run did not complete (nothing to bisect
+against), 130 interrupted (the runs in progress are stopped with SIGINT).
 """
 import argparse
 import concurrent.futures
@@ -128,7 +129,27 @@ class Sweeper:
             self.reused_other_build = True
         if reusing and data.get("threads") != self.threads:  # its wall and CPU times are of another thread count
             self.reused_other_threads = True
+        if reusing:
+            return self.resummarize(run, data)
         return data["row"]
+
+    def resummarize(self, run, data):
+        """A kept run's row, its columns read again from its record.h5 with today's tools: only what the
+        record cannot say (exit status, times, how the sweep stopped it) comes from result.json. A row kept
+        whole would carry the counting of the tools that first read it (particle_steps once over-counted)."""
+        kept = data["row"]
+        rr = runner.RunResult()
+        saved = data.get("run_result")
+        if saved is None:  # written before the run's own result was saved: rebuild it from the row
+            saved = {"exit_code": kept.get("exit_code"), "wall_s": kept.get("wall_s"), "cpu_s": kept.get("cpu_s"),
+                     "timed_out": kept.get("status") == "timeout",
+                     "killed": "SIGKILL" in (kept.get("message") or "")}
+        for k, v in saved.items():
+            setattr(rr, k, v)
+        d = self.run_dir(run)
+        rr.stderr_path = os.path.join(d, "sweep_stderr.txt")
+        with self.metric_lock:
+            return record.summarize(d, rr, data.get("timeout_s", self.timeout_of(run)))
 
     def timeout_of(self, run):
         return run.timeout_s if run.timeout_s is not None else self.sw.timeout_s
@@ -154,7 +175,8 @@ class Sweeper:
         results.write_json(os.path.join(d, "result.json"), {
             "id": run.id, "scene": self.sw.scene, "scene_sha": self.sw.scene_sha, "set_args": run.set_args(),
             "build": self.build_stamp, "threads": self.threads, "timeout_s": timeout,
-            "finished": datetime.datetime.now().isoformat(timespec="seconds"), "row": row})
+            "finished": datetime.datetime.now().isoformat(timespec="seconds"), "row": row,
+            "run_result": {k: getattr(rr, k) for k in ("exit_code", "timed_out", "stopped", "killed", "wall_s", "cpu_s")}})
         return row
 
     def infos(self, rows_by_id, runs=None):
@@ -258,7 +280,9 @@ def run_grid(sweeper, selected):
                     row = fut.result()
                 except (Interrupted, KeyboardInterrupt):
                     continue
-                rows_by_id[run.id] = row
+                if run.id not in rows_by_id:  # finished before the stop but not yet taken: its metrics too
+                    rows_by_id[run.id] = row
+                    sweeper.compute_metrics(run, row, sweeper.infos(rows_by_id), "plain")
     infos = sweeper.infos(rows_by_id)
     for r in selected:
         if r.id in rows_by_id:
@@ -317,6 +341,14 @@ def draw_charts(sweeper, csv_path):
     return made
 
 
+class BisectionNotRun(Exception):
+    """Nothing could be bisected; carries the exit status (2: the command line, 3: the reference run)."""
+
+    def __init__(self, status, message):
+        super().__init__(message)
+        self.status = status
+
+
 def run_bisection(sweeper, selected):
     """One bisection per selected run (grid point or case), the bisections in parallel."""
     sw = sweeper.sw
@@ -331,7 +363,8 @@ def run_bisection(sweeper, selected):
     if reference is not None and any(metrics.METRICS[m["name"]].uses_reference for m in sw.metrics):
         selected = [t for t in selected if t is not reference]
         if not selected:
-            sys.exit("sweep: the only run selected is the reference; nothing to bisect")
+            raise BisectionNotRun(2, "sweep: the only run selected is the reference run; nothing to bisect "
+                                     "(select the runs to bisect with --only)")
         print(f"bisection: the reference run {reference.label() or reference.id} first", flush=True)
         try:
             reference_rows[reference.id] = sweeper.execute(reference)
@@ -341,8 +374,8 @@ def run_bisection(sweeper, selected):
         status = reference_rows[reference.id].get("status")
         print(f"[{reference.label() or 'reference'}] {status}", flush=True)
         if status != "completed":  # every probe would fail for want of it, which reads as 'neither end passes'
-            sys.exit(f"sweep: the reference run did not complete ({status}: "
-                     f"{reference_rows[reference.id].get('message') or ''}); nothing to bisect against")
+            raise BisectionNotRun(3, f"sweep: the reference run did not complete ({status}: "
+                                     f"{reference_rows[reference.id].get('message') or ''}); nothing to bisect against")
     probes = {r.id: [] for r in selected}
     summaries = {}
     print(f"bisection on {key} in [{cfg['low']}, {cfg['high']}] ({cfg['scale']}"
@@ -364,7 +397,7 @@ def run_bisection(sweeper, selected):
             sweeper.compute_metrics(prun, row, infos, "all")
             passed = row.get("status") == "completed"
             why = row.get("message") or ""
-            for col, limit in fail_if.items():
+            for col, limit in (fail_if.items() if passed else ()):  # a failed run keeps its own reason
                 v = row.get(col)
                 if v is None or (isinstance(v, float) and math.isnan(v)):
                     passed, why = False, f"fail_if: {col} has no value"
@@ -473,6 +506,14 @@ def main(argv=None):
         sw = specs.load(args.sweep_file)
         for m in sw.metrics:
             metrics.check_params(m["name"], m["params"])
+        if sw.bisect is not None:  # a misspelt column would fail every probe: "no stable value"
+            columns = set(results.RUN_COLUMNS)
+            for m in sw.metrics:
+                columns |= {f"{m['label']}.{k}" for k in metrics.METRICS[m["name"]].columns}
+            for col in sw.bisect["fail_if"]:
+                if col not in columns:
+                    raise specs.SweepError(f"{args.sweep_file}: [bisect] fail_if: {col!r} is not a column of this "
+                                           f"sweep; metric columns: {', '.join(sorted(columns - set(results.RUN_COLUMNS)))}")
     except (specs.SweepError, metrics.MetricError) as err:
         print(f"sweep: {err}", file=sys.stderr)
         return 2
@@ -510,7 +551,12 @@ def main(argv=None):
           f"OMP_NUM_THREADS={sweeper.env.get('OMP_NUM_THREADS', '(unset)')}, into {out}", flush=True)
 
     if sw.bisect is not None:
-        interrupted = run_bisection(sweeper, selected)
+        try:
+            interrupted = run_bisection(sweeper, selected)
+        except BisectionNotRun as err:
+            print(err, file=sys.stderr)
+            write_description(sweeper, started, {"bisect": sw.bisect, "not_run": str(err)})
+            return err.status
         write_description(sweeper, started, {"bisect": sw.bisect})
         return 130 if interrupted else 0
 

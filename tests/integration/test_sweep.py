@@ -8,6 +8,7 @@ What theory says and the tests hold the tools to:
   * against a much finer run, newmark and generalized-alpha converge as O(dt^2), backward Euler as O(dt).
 """
 import csv
+import json
 import math
 import os
 import re
@@ -533,6 +534,54 @@ name = "beam"
     assert "(kept)" not in text, text
 
 
+def test_resume_reads_a_kept_runs_record_again():
+    """A kept run's columns come from its record.h5 as today's tools read it, not from the row an older tool
+    wrote (a resumed sweep had kept an over-counted particle_steps): a result.json whose counts disagree with
+    its record is corrected; the exit status and times it holds are kept."""
+    d = harness.out_dir("sweep-resume-reread")
+    path = write(os.path.join(d, "s.toml"), f'''
+[sweep]
+scene = "{BEAM}"
+threads_per_run = 1
+[fixed]
+"run.end_time" = 0.01
+[[case]]
+name = "beam"
+''')
+    out = os.path.join(d, "out")
+    rc, text = sweep(path, "--out", out, "--no-charts")
+    first = rows_of(out)[0]
+    assert rc == 0 and first["status"] == "completed", text
+    run_dir = os.path.join(out, "runs", first["run"])
+    with open(os.path.join(run_dir, "result.json")) as f:
+        data = json.load(f)
+    data["row"].update(coupling_iterations=9999, element_steps=123456789, windows=1)
+    data.pop("run_result", None)  # as written before it was saved: rebuilt from the row
+    with open(os.path.join(run_dir, "result.json"), "w") as f:
+        json.dump(data, f)
+    rc, text = sweep(path, "--out", out, "--no-charts", "--resume")
+    kept = rows_of(out)[0]
+    assert rc == 0 and "(kept)" in text, text
+    for col in ("coupling_iterations", "element_steps", "windows", "t_end", "status", "wall_s", "cpu_s", "exit_code"):
+        assert kept[col] == first[col], (col, kept[col], first[col])
+
+
+def test_watchpoint_rows_stop_at_a_row_cut_short():
+    """A killed run's watchpoints.csv may end inside a row: whole rows only, by the coordinator's own rule
+    (a cut inside a number had been read as a wrong value, a cut between fields had crashed the plot)."""
+    d = harness.out_dir("sweep-watchpoint-cut")
+    whole = "time,name,x,y,dx,dy\n0,tip,0.3,0.2,0,0\n0.001,tip,0.3,0.2,1e-05,-2.5e-05\n"
+    for tail in ("", "0.002,tip,0.3,0.2,3e-05,-1.2", "0.002,tip,0.3", "0.0"):
+        path = write(os.path.join(d, "watchpoints.csv"), whole + tail)
+        rows = metrics.watchpoint_rows(path)
+        assert [(r["time"], r["dy"]) for r in rows] == [(0.0, 0.0), (0.001, -2.5e-05)], (tail, rows)
+        t, v = metrics.watchpoint_series(d, "tip", "dy")
+        assert list(t) == [0.0, 0.001] and list(v) == [0.0, -2.5e-05], (tail, t, v)
+    p = subprocess.run(["/usr/bin/python3", os.path.join(harness.ROOT, "tools", "plot_watchpoints.py"), path,
+                        os.path.join(d, "plot.png")], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 0 and os.path.getsize(os.path.join(d, "plot.png")) > 0, p.stderr
+
+
 def test_integer_bisection_upwards():
     """Newton's iteration cap: too few iterations fail, so the smallest passing value is sought."""
     d = harness.out_dir("sweep-bisect-int")
@@ -663,6 +712,17 @@ def test_sweep_file_mistakes_stop_before_running():
                              "unknown parameter(s) componant"),
         "two references": ('[sweep]\nscene = "{s}"\n[[case]]\nreference = true\n[[case]]\nname = "b"\nreference = true\n',
                            "more than one [[case]] has reference = true"),
+        # A key set by two axes ran with the last one's value under a label naming the other (a review).
+        "two axes, one key": ('[sweep]\nscene = "{s}"\n[grid]\n"run.end_time" = [0.1, 0.2]\n[[grid.m]]\n'
+                              'label = "short"\n"run.end_time" = 0.05\n',
+                              "'run.end_time' is set by both 'run.end_time' and 'm'"),
+        # Two bundles with the same keys: one of them vanished without a word.
+        "equal bundles": ('[sweep]\nscene = "{s}"\n[[grid.m]]\nlabel = "A"\n"run.end_time" = 0.1\n'
+                          '[[grid.m]]\nlabel = "B"\n"run.end_time" = 0.1\n', "two grid runs have the same settings"),
+        # A misspelt fail_if column failed every probe: "neither end passes".
+        "fail_if column": ('[sweep]\nscene = "{s}"\n[[case]]\nname = "a"\n[[metric]]\nname = "window_stat"\n'
+                           'label = "it"\ncolumn = "iterations"\n[bisect]\nkey = "run.end_time"\nlow = 0.01\n'
+                           'high = 0.1\nfail_if = { "it.valeu" = 3 }\n', "fail_if: 'it.valeu' is not a column"),
     }
     for name, (body, needle) in cases.items():
         path = write(os.path.join(d, name.replace(" ", "_") + ".toml"), body.replace("{s}", BEAM))

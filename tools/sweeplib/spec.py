@@ -278,6 +278,9 @@ def _expand(s, cases, fail):
         key = run.id.rsplit("-", 1)[1]  # the hash of the override set
         if key in by_id:
             old = by_id[key]
+            if not run.case and not old.case:
+                fail(f"two grid runs have the same settings ({old.label()}; {run.label()}): "
+                     "two bundles of an axis set the same keys to the same values")
             if run.case and old.case and run.case != old.case:
                 fail(f"{what} has exactly the settings of case {old.case!r}")
             # A case with a grid point's settings names that run (e.g. the finest grid run as reference).
@@ -289,6 +292,14 @@ def _expand(s, cases, fail):
         by_id[key] = run
         runs.append(run)
 
+    # A scene key set by two axes would take whichever comes last, and the run would be labelled with a value
+    # it did not run with: refused.
+    setter = {}
+    for a in s.axes:
+        for k in sorted({k for _, keys in a.values for k in keys} if a.bundles else {a.name}):
+            if k in setter:
+                fail(f"[grid] {k!r} is set by both {setter[k]!r} and {a.name!r}: one axis per scene key")
+            setter[k] = a.name
     axis_values = [[(a, v) for v in a.values] for a in s.axes]
     for combo in (itertools.product(*axis_values) if s.axes else []):
         overrides, settings, slug = dict(s.fixed), {}, []
