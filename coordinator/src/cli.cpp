@@ -87,7 +87,7 @@ int main_cli(int argc, char** argv) {
         if (scene.empty()) return usage_error("check needs a scene file");
         try {
             Scene s = load_scene(scene, opt.overrides);
-            std::string roles = std::string(s.has("structure") ? "structure " : "") + (s.has("fluid") ? "fluid" : "");
+            const std::string roles = s.has("structure") && s.has("fluid") ? "structure fluid" : s.has("fluid") ? "fluid" : "structure";
             std::cout << scene << ": valid; participants: " << roles << "\n";
             for (const std::string& w : scene_warnings(s)) std::cerr << "sphfsi: warning: " << w << "\n";
             return 0;

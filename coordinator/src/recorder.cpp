@@ -346,12 +346,18 @@ void Recorder::flush() {
     h5::flush(h5_.get());
 }
 
-// XDMF 3 sidecar: a temporal collection of point clouds read straight from the HDF5 datasets.
+// XDMF 3 sidecar: a temporal collection of point clouds read straight from the HDF5 datasets. It describes
+// the fluid's frames alone (docs/record.md): one file, so a foreign structure that also sends `position`
+// must not replace it. Fields are the participant's own (docs/protocol.md lets it send any), so only what
+// XDMF can say is listed: positions of 2 or 3 components (else no sidecar), per-particle scalars and
+// vectors (a field with more axes is left out; it is still in record.h5).
 void Recorder::write_xdmf(const std::string& role) {
+    if (role != "fluid") return;
     if (resuming_.pending()) return;  // record.h5 is still the interrupted run's, which its sidecar describes
     const std::string group = "/frames/" + role + "/";
     const auto& pos = series_.at(group + "position");
-    const hsize_t n = pos.row_shape().empty() ? 0 : pos.row_shape()[0];
+    if (pos.row_shape().size() != 2 || (pos.row_shape()[1] != 2 && pos.row_shape()[1] != 3)) return;
+    const hsize_t n = pos.row_shape()[0], dims = pos.row_shape()[1];
     const std::string h5name = file_.filename().string();
     // One row of a (frames, n, comps) dataset as an (n, comps) array.
     auto slab = [&](std::ostringstream& x, hsize_t row, const std::string& field, hsize_t comps, bool is_int) {
@@ -371,13 +377,15 @@ void Recorder::write_xdmf(const std::string& role) {
         const hsize_t row = k;
         x << "<Grid Name=\"frame" << row << "\" GridType=\"Uniform\">\n<Time Value=\"" << times[k]
           << "\"/>\n<Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n
-          << "\"/>\n<Geometry GeometryType=\"XY\">\n";
-        slab(x, row, "position", 2, false);
+          << "\"/>\n<Geometry GeometryType=\"" << (dims == 2 ? "XY" : "XYZ") << "\">\n";
+        slab(x, row, "position", dims, false);
         x << "</Geometry>\n";
         for (const auto& [path, s] : series_) {
             if (path.rfind(group, 0) != 0) continue;
             const std::string field = path.substr(group.size());
-            if (field == "position" || field == "time" || s.row_shape().empty() || s.row_shape()[0] != n) continue;
+            if (field == "position" || field == "time" || s.row_shape().empty() || s.row_shape().size() > 2 ||
+                s.row_shape()[0] != n)
+                continue;
             const hsize_t comps = s.row_shape().size() > 1 ? s.row_shape()[1] : 1;
             // XDMF's Vector means 3 components; 2D vectors go in as Matrix (n x 2), read as 2-component arrays.
             x << "<Attribute Name=\"" << field << "\" AttributeType=\""

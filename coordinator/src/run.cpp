@@ -390,6 +390,11 @@ WindowPlan Runner::plan_window(double t_stop) const {
         return p;
     }
     p.dt = structure_dt_;
+    // A sine is sampled at 20 points a period or more: sampled once per structure step, a frequency above
+    // half the step rate folded back onto a lower one (a review ran 1/dt - 100 Hz, and it moved the beam as
+    // 100 Hz did, to round-off). Held over 1/20 of a period, midpoint samples carry the sine's own frequency at
+    // sin(pi/20)/(pi/20) = 0.996 of its amplitude.
+    if (load->at("profile").as_string() == "sine") p.dt = std::min(p.dt, 1.0 / (20.0 * load->at("frequency").as_double()));
     p.structure_substeps = 1;
     land_on_stop(p, t_stop);
     return p;

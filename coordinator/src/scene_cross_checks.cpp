@@ -53,18 +53,23 @@ std::vector<WettedMember> wetted_members(const Value& structure) {
 }
 
 // The fluid fills the published cross-sections with solid particles; outside the tank and its walls they
-// would be outside every wall, and the neighbour grid would grow with the distance.
+// would be outside every wall, and the neighbour grid would grow with the distance. A periodic axis has no
+// walls: there the cross-section must lie within the period (the fluid's check_inside_tank, the same rule).
 void check_structure_in_tank(const Value& fluid, const std::vector<WettedMember>& wetted, Errors& e) {
     const Value& tank = fluid.at("tank");
     const double wall = static_cast<double>(tank.at("wall_layers").as_int()) * fluid.at("dp").as_double();
+    const std::string periodic = fluid.at("periodic").as_string();
+    const double x_wall = periodic == "x" || periodic == "xy" ? 0.0 : wall;
+    const double y_wall = periodic == "y" || periodic == "xy" ? 0.0 : wall;
     const double W = tank.at("width").as_double(), H = tank.at("height").as_double();
     for (const WettedMember& m : wetted)
         for (const auto& [x, y] : m.corners())
-            if (x < -wall || x > W + wall || y < -wall || y > H + wall) {
+            if (x < -x_wall || x > W + x_wall || y < -y_wall || y > H + y_wall) {
                 e.add(&fluid.at("tank"), "key 'structure.members[" + std::to_string(m.index) + "]': its wetted cross-section reaches (" +
                                              shortest(x) + ", " + shortest(y) + ") m, outside the tank and its walls (x in [" +
-                                             shortest(-wall) + ", " + shortest(W + wall) + "], y in [" + shortest(-wall) + ", " +
-                                             shortest(H + wall) + "] m); fluid.tank and the structure's geometry disagree");
+                                             shortest(0.0 - x_wall) + ", " + shortest(W + x_wall) + "], y in [" + shortest(0.0 - y_wall) + ", " +
+                                             shortest(H + y_wall) + "] m" + (periodic == "none" ? "" : "; a periodic axis's period alone") +
+                                             "); fluid.tank and the structure's geometry disagree");
                 break;
             }
 }
@@ -107,6 +112,18 @@ void check_across_sections(const Value& scene, const std::vector<std::string>& e
                                       "(the interface the fluid acts on)");
     if (const Value* load = scene.find("load"); load && wetted.empty())
         e.add(load, "[load] is spread over the wetted interface, and no structure.members[] is wetted");
+    // The structure's static solve sees its own loads; [load] reaches it with the first window. A ramp or a
+    // sine is 0 at t0, so the start is in equilibrium all the same; a constant load would start it swinging.
+    const Value* statics = find_path(scene, "structure.initial.static_equilibrium");
+    if (const Value* load = scene.find("load");
+        load && load->at("profile").as_string() == "constant" && statics && statics->as_bool()) {
+        const auto f = load->at("force").as_doubles();
+        if (f[0] != 0.0 || f[1] != 0.0)
+            e.add(statics,
+                  "key 'structure.initial.static_equilibrium': the static solve sees the structure's own loads only, and a "
+                  "constant [load] is applied from the first window on, so the run would start out of equilibrium and "
+                  "swing; give the load as structure.point_loads, or use load.profile = \"ramp\"");
+    }
     if (const Value* points = scene.find("watchpoint")) check_watchpoints(*points, wetted, e);
     if (builtin("fluid")) check_structure_in_tank(scene.at("fluid"), wetted, e);
 }

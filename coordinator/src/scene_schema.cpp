@@ -32,9 +32,16 @@ void run_section(schema::TableSchema& s) {
                                   "built-in solvers takes well under a second; raise it for a foreign solver with slower steps.")
         .unit("s").greater_than(0).at_most(1e5).fallback(30.0);
     run.check([](const Value& t, const std::string& path, schema::Errors& e) {
-        if (t.at("heartbeat_s").as_double() * 2 > t.at("timeout_s").as_double())
-            e.add(&t.at("heartbeat_s"), "key '" + path + ".heartbeat_s': must be at most half of " + path +
-                                            ".timeout_s, or a healthy participant would look dead");
+        const double heartbeat = t.at("heartbeat_s").as_double(), timeout = t.at("timeout_s").as_double();
+        if (heartbeat * 2 > timeout) {
+            // Named where the scene wrote it: a heartbeat left at its default is the timeout's doing.
+            const bool written = t.at("heartbeat_s").line != 0;
+            e.add(written ? &t.at("heartbeat_s") : &t.at("timeout_s"),
+                  "key '" + path + (written ? ".heartbeat_s'" : ".timeout_s'") + ": " + path + ".heartbeat_s = " +
+                      shortest(heartbeat) + " s" + (written ? "" : " (the default)") + " must be at most half of " + path +
+                      ".timeout_s = " + shortest(timeout) + " s, or a healthy participant would look dead; allowed: " +
+                      "heartbeat_s <= " + shortest(timeout / 2) + " s, or timeout_s >= " + shortest(2 * heartbeat) + " s");
+        }
         // Every frame and checkpoint is a window boundary and a write: a run asking for more than this many
         // is a typo (1e-300 for 1e-3), and would crawl while it filled the disk.
         constexpr double kMaxFrames = 1e6;
@@ -62,7 +69,10 @@ void coupling_section(schema::TableSchema& s) {
              "window: one structure step per window, which a structure much lighter than the fluid it carries needs "
              "under implicit coupling, with structure.time.integrator = \"backward_euler\" (docs/coupling.md).")
         .fallback("resolve");
-    c.integer("max_fluid_steps", "multi-rate: most fluid steps one window may span.").at_least(1).at_most(100000).fallback(10);
+    c.integer("max_fluid_steps", "multi-rate: the window is this many times the fluid's wanted step at the window's "
+                                 "start; the fluid then steps at its own CFL step inside it, so a window can take a "
+                                 "few steps more or fewer.")
+        .at_least(1).at_most(100000).fallback(10);
     c.choice("predictor", {"none", "linear", "quadratic"},
              "Interface displacement predicted for the window's end: what explicit schemes give the fluid, and implicit "
              "schemes' first iterate (docs/coupling.md).")
@@ -98,7 +108,9 @@ void load_section(schema::TableSchema& s) {
     l.choice("profile", {"constant", "ramp", "sine"}, "constant from t = 0; ramp: linear over ramp_time then constant; "
              "sine: force * sin(2 pi frequency t).").fallback("constant");
     l.number("ramp_time", "Duration of the ramp.").unit("s").greater_than(0).fallback(1.0);
-    l.number("frequency", "Frequency of the sine profile.").unit("Hz").greater_than(0).fallback(1.0);
+    l.number("frequency", "Frequency of the sine profile. The load is held at its midpoint value over each window, "
+                          "and windows are at most 1/20 of its period (shorter than the structure's own step if need be).")
+        .unit("Hz").greater_than(0).fallback(1.0);
 }
 
 void watchpoint_section(schema::TableSchema& s) {
@@ -185,7 +197,14 @@ schema::TableSchema scene_schema(const std::vector<std::string>& external) {
             if (!fixed && c->contains("window_dt"))  // silently ignored, it would read as if it set the windows
                 e.add(&c->at("window_dt"), "key 'coupling.window_dt': used only with coupling.window = \"fixed\" (this "
                                            "scene's is \"" + c->at("window").as_string() + "\"); remove it or set the window rule");
+            // max_fluid_steps is not refused likewise: a multi-rate scene keeps it when a --set switches the rule
+            // (scenarios/elastic_gate.toml tells how to run it with the thesis's windows).
         }
+        if (const Value* l = t.find("load"))  // a key of another profile, written, would be ignored as silently
+            for (const auto& [key, profile] : {std::pair<const char*, const char*>{"ramp_time", "ramp"}, {"frequency", "sine"}})
+                if (l->at(key).line != 0 && l->at("profile").as_string() != profile)
+                    e.add(&l->at(key), std::string("key 'load.") + key + "': used only with load.profile = \"" + profile +
+                                           "\" (this scene's is \"" + l->at("profile").as_string() + "\"); remove it or set the profile");
         check_watchpoint_names(t, e);
         check_across_sections(t, external, e);
     });

@@ -214,6 +214,7 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
             }
             quads.push_back(q);
         }
+        const std::size_t fluid_before = sim_->fluid_count();
         sim_->add_solids(
             coupling->reference_positions(), coupling->displaced_positions(start_displacement_),  // as the cells
             [coupling](std::size_t k, double t, Vec2& x, Vec2& v, Vec2& a) { coupling->kinematics(k, t, x, v, a); },
@@ -228,6 +229,12 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
                 }
                 return false;
             });
+        // A structure laid over all the water leaves a run that completes and means nothing (a review: a plate
+        // 0.1 m thick over the whole column ended "completed" with no fluid).
+        if (sim_->fluid_count() == 0 && fluid_before > 0)
+            throw SolverError("bad_config", "the structure's wetted cross-section covers all " + std::to_string(fluid_before) +
+                                                " water particles (they are cleared within dp/2 of it): fluid.water and the "
+                                                "structure's geometry disagree");
         std::vector<SolidSection::Quad> cells(mesh.cells.rows());
         for (std::size_t c = 0; c < cells.size(); ++c)
             for (std::size_t k = 0; k < 4; ++k) cells[c][k] = mesh.cells(c, static_cast<std::uint64_t>(k));

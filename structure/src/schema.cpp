@@ -365,7 +365,10 @@ TableSchema build() {
 
     auto& init = s.table("initial", "Initial state at t0 (default: undeformed, at rest); READY passes the interface's "
                                     "state at t0 on to the fluid and the watchpoints");
-    init.boolean("static_equilibrium", "start from static equilibrium under the scene loads at t0 (and any preload)")
+    init.boolean("static_equilibrium", "start from static equilibrium under the structure's own loads at t0 (point "
+                                       "loads, self-weight, and any preload); not under the coordinator's [load], "
+                                       "which the structure first receives with the first window (a constant [load] "
+                                       "with this key is refused)")
         .fallback(false);
     init.integer("mode", "start deflected in this natural mode (1 = fundamental), at rest; 0 = off").at_least(0)
         .fallback(0);

@@ -473,6 +473,13 @@ TEST_SUITE("adapter") {
                 CHECK((init_verdict(r).find("a periodic axis's period alone") != std::string::npos) == periodic);
             }
         }
+        {  // A plate laid over all the water is refused: the run had completed with no fluid at all.
+            sphfsi::protocol::InitRequest r = req;
+            r.config.as_table_mut()["water"] = Value(Value::Array{block(0.2, 0.02, 0.1, 0.02)});
+            CHECK(init_verdict(r).find("covers all") != std::string::npos);
+            r.config.as_table_mut()["water"] = Value(Value::Array{block(0.2, 0.02, 0.1, 0.03)});  // 4 rows above it stay
+            CHECK(init_verdict(r) == "accepted");
+        }
         {  // A gate's solid particles and a structure's cannot share a fluid: bad_config, naming the gate.
             sphfsi::protocol::InitRequest r = req;
             r.config = with(f, {{"gate.x0", 0.45}, {"gate.lift_speed", 1.0}});
