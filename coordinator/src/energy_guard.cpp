@@ -1,6 +1,7 @@
 #include "sphfsi/coordinator/energy_guard.hpp"
 
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -30,14 +31,29 @@ constexpr const char* light_structure_remedy =
 
 }  // namespace
 
-void account_energy(const EnergyLimits& limits, std::uint64_t window, double t, const WindowOutcome& o,
-                    const InterfaceWork& work, InterfaceState& s) {
+std::string account_energy(const EnergyLimits& limits, std::uint64_t window, double t, const WindowOutcome& o,
+                           const InterfaceWork& work, InterfaceState& s) {
     s.work_total += work.on_structure;
     s.created_total += work.created;
     const auto fluid = stats_sum(o.fluid.reply, "kinetic_energy", "potential_energy");
     const auto structure = stats_sum(o.structure.reply, "kinetic_energy", "strain_energy");
-    if (!(s.fluid_energy > 0.0) && fluid) s.fluid_energy = *fluid;  // the yardstick, from the first window
-    if (!(s.fluid_energy > 0.0)) return;
+    // The yardstick, taken once, from the first window that reports it (0: not yet). Potential energy is
+    // measured from the origin, so it can be 0 or negative (water below y = 0, gravity with an x part): the
+    // checks then have no scale and are off, said once. Re-taking it every window until it turned positive
+    // had made "after the first window" some later window (a review, 2026-11-27).
+    if (s.fluid_energy == 0.0 && fluid) {
+        if (*fluid > 0.0) {
+            s.fluid_energy = *fluid;
+        } else {
+            s.fluid_energy = std::numeric_limits<double>::quiet_NaN();
+            std::ostringstream m;
+            m << "the fluid's mechanical energy after the first window is " << *fluid << " J/m, not positive (its "
+              << "potential energy is measured from the origin along gravity): the coupling's energy checks "
+              << "(coupling.max_created_energy, max_energy_gain) have no yardstick and are off for this run";
+            return m.str();
+        }
+    }
+    if (!(s.fluid_energy > 0.0)) return {};
     // The structure's own scene loads (point and distributed loads, self-weight) do work on it from outside
     // the pair, like wind: its external work less the interface's. It is taken out of the balance, or a
     // stable plate under a point load stopped as diverged in its 4th window (a review, 2026-11-27).
@@ -61,7 +77,7 @@ void account_energy(const EnergyLimits& limits, std::uint64_t window, double t, 
     }
 
     const double gain_limit = limits.max_gain * s.fluid_energy;
-    if (limits.external_work || !(gain_limit > 0.0) || std::isnan(s.total_energy) || !fluid || !structure) return;
+    if (limits.external_work || !(gain_limit > 0.0) || std::isnan(s.total_energy) || !fluid || !structure) return {};
     const double gain = *fluid + *structure - load_work - s.total_energy;
     if (gain > gain_limit) {
         std::ostringstream m;
@@ -74,6 +90,7 @@ void account_energy(const EnergyLimits& limits, std::uint64_t window, double t, 
           << "window: " << light_structure_remedy;
         diverged(window, t, m.str());
     }
+    return {};
 }
 
 }  // namespace sphfsi::coordinator

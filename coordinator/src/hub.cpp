@@ -161,6 +161,12 @@ void Hub::receive_all() {
             continue;
         }
         const std::string& role = known->second;
+        // An ERROR back carries the version agreed at WELCOME, as every message after it (docs/protocol.md 3.1).
+        auto error_reply = [&](std::uint64_t seq, const std::string& code, const std::string& why) {
+            Message e = make_message(MessageType::Error, seq, token_, ErrorReply{code, why, seq});
+            e.version = peers_.at(role).version;
+            send_raw(id, e);
+        };
         auto start = Clock::now();
         Message m;
         try {
@@ -168,14 +174,14 @@ void Hub::receive_all() {
             m = decode(payload.data(), payload.size());
         } catch (const ProtocolError& e) {
             if (e.answerable())  // a malformed HEARTBEAT or ERROR is not answered (docs/protocol.md, "Errors")
-                send_raw(id, make_message(MessageType::Error, e.seq(), token_, ErrorReply{e.code(), e.what(), e.seq()}));
+                error_reply(e.seq(), e.code(), e.what());
             throw ParticipantFailure(role, "garbage", "sent a malformed message (" + e.code() + "): " + e.what());
         }
         messaging_s_ += seconds_since(start);
         // Refused as docs/protocol.md says (answered unless HEARTBEAT or ERROR), then fatal: a welcomed
         // participant that changes token or version mid-run is broken.
         auto refusal = [&](const std::string& code, const std::string& why) {
-            if (is_answered(m.type)) send_raw(id, make_message(MessageType::Error, m.seq, token_, ErrorReply{code, why, m.seq}));
+            if (is_answered(m.type)) error_reply(m.seq, code, why);
             return ParticipantFailure(role, "garbage", why);
         };
         if (m.token != token_) throw refusal("bad_token", "sent a message with a wrong token");

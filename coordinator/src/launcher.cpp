@@ -47,6 +47,9 @@ void Launcher::start(const std::string& role, const std::vector<std::string>& ar
         // the record locked. (close_range is a plain system call, safe between fork and exec.)
         if (::close_range(3, ~0U, 0) != 0)
             for (long fd = 3, n = ::sysconf(_SC_OPEN_MAX); fd < n; ++fd) ::close(static_cast<int>(fd));
+        // The coordinator ignores SIGPIPE (a dead participant's socket is its to report), and an ignored
+        // signal stays ignored across exec: a participant, or a wrapper script's pipeline, gets the default back.
+        ::signal(SIGPIPE, SIG_DFL);
         ::putenv(env_token.data());
         ::execvp(args[0], args.data());
         std::fprintf(stderr, "[%s] cannot execute %s: %s\n", role.c_str(), args[0], std::strerror(errno));

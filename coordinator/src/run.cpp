@@ -150,13 +150,14 @@ std::vector<std::string> Runner::program_for(const std::string& role) const {
 int Runner::execute() {
     std::optional<Checkpoint> resume;
     if (opt_.resume) {
-        resume = read_checkpoint(opt_.out_dir / "checkpoint.bin");
-        // A completed run has nothing left: resuming it re-ran its tail from the last checkpoint.
+        // A completed run has nothing left: resuming it re-ran its tail from the last checkpoint. Asked first:
+        // a run that completed before its first checkpoint has none, and "no checkpoint" misled.
         if (record_status(opt_.out_dir / "record.h5") == "completed") {
             std::cerr << "sphfsi: the run in " << opt_.out_dir.string()
                       << " completed; there is nothing to resume (start a new run to change it)" << std::endl;
             return 2;
         }
+        resume = read_checkpoint(opt_.out_dir / "checkpoint.bin");
         // The scene as the run saw it, not as the file may read now; paths stay relative to the original.
         scene_ = parse_scene(resume->scene_text, resume->scene_file, resume->overrides);
         t_ = resume->t;  // an interruption before INIT completes is reported at the checkpoint's time
@@ -242,6 +243,10 @@ int Runner::execute() {
     if (code == 0) {  // a completed resume replaces the interrupted files whatever time they reached
         take_over_when_caught_up(std::numeric_limits<double>::infinity());
     } else {
+        // A resume that reached the interrupted record's end holds all of it and then this stop: its copy
+        // replaces the files, as it would have at the end of the window it stopped in (the loop takes over last,
+        // after the window's frames and checkpoint, any of which can fail).
+        take_over_when_caught_up(t_);
         if (recorder_->resume_pending()) {
             log("the resumed run stopped at t = " + std::to_string(t_) + " s, before t = " +
                 std::to_string(recorder_->history_end()) + " s, where the interrupted run's record ends: " +
@@ -358,16 +363,25 @@ void Runner::initialise(std::optional<Checkpoint>& resume) {
 }
 
 // Wind on the free surface or a sliding lid does work on the fluid, so the pair's energy may rise: the energy
-// guard's total check is off for such scenes.
+// guard's total check is off for such scenes. So does gravity along a periodic axis, the way a channel is
+// driven by a mean pressure gradient (docs/scenes.md, fluid.gravity): water crossing the seam keeps its speed
+// and re-enters a period higher, and the potential energy the fluid reports jumps by m g L each time (a
+// review's gravity-driven channel stopped as "coupling diverged" with nothing diverging).
 bool Runner::fluid_does_external_work() const {
-    auto nonzero = [&](std::string_view path) {
+    auto nonzero = [&](std::string_view path, int component = -1) {
         const Value* v = find_path(scene_.tree, path);
         if (!v || !v->is_array()) return false;
-        for (const auto& x : v->as_array())
-            if (x.is_number() && x.as_double() != 0.0) return true;
+        const auto& a = v->as_array();
+        for (std::size_t i = 0; i < a.size(); ++i)
+            if ((component < 0 || static_cast<int>(i) == component) && a[i].is_number() && a[i].as_double() != 0.0)
+                return true;
         return false;
     };
-    return nonzero("fluid.free_surface.wind_shear") || nonzero("fluid.tank.lid_velocity");
+    const Value* periodic = find_path(scene_.tree, "fluid.periodic");
+    const std::string axes = periodic && periodic->is_string() ? periodic->as_string() : "none";
+    const bool driven_along_period = ((axes == "x" || axes == "xy") && nonzero("fluid.gravity", 0)) ||
+                                     ((axes == "y" || axes == "xy") && nonzero("fluid.gravity", 1));
+    return nonzero("fluid.free_surface.wind_shear") || nonzero("fluid.tank.lid_velocity") || driven_along_period;
 }
 
 WindowPlan Runner::plan_window(double t_stop) const {
@@ -463,7 +477,9 @@ void Runner::loop() {
         if (watchpoints_) watchpoints_->write(t_, iface_.displacement);
         // After the window is recorded, so that a run stopped here keeps the window that stopped it (and the
         // root's interface totals, taken from the energy account, include it).
-        if (coupled_) account_energy(energy_limits_, windows_, t_, o, work, iface_);
+        if (coupled_)
+            if (const std::string off = account_energy(energy_limits_, windows_, t_, o, work, iface_); !off.empty())
+                log("warning: " + off);
         if (!o.stop_run.empty()) throw std::runtime_error(o.stop_run);
         progress_->update(t_, steps_);
         // Frames at k * output_interval, and the end's state whether or not end_time is one of those.

@@ -98,7 +98,8 @@ void coupling_section(schema::TableSchema& s) {
     c.number("max_energy_gain",
              "Stop the run as diverged when the fluid's plus the structure's mechanical energy rises above its "
              "value after the first window by more than this multiple of the fluid's mechanical energy; off when "
-             "the scene does work on the fluid (wind, a moving lid) (docs/coupling.md); 0 = never.")
+             "the scene does work on the fluid (wind, a moving lid, gravity along a periodic axis) or that energy "
+             "is not positive (docs/coupling.md); 0 = never.")
         .at_least(0).fallback(0.05);
 }
 

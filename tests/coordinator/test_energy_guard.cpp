@@ -45,4 +45,21 @@ TEST_SUITE("energy_guard") {
         MESSAGE(what);
         CHECK(what.find("coupling diverged: window 3") != std::string::npos);
     }
+
+    TEST_CASE("the fluid's yardstick is the first window's; not positive, the checks are off and say so once") {
+        const EnergyLimits limits;
+        {  // Taken once: a later window's larger energy does not replace it.
+            InterfaceState s;
+            CHECK(account_energy(limits, 1, 0.01, window(10.0, 2.0, 0.0), InterfaceWork{}, s).empty());
+            CHECK(account_energy(limits, 2, 0.02, window(10.4, 2.0, 0.0), InterfaceWork{}, s).empty());
+            CHECK(s.fluid_energy == 10.0);
+        }
+        // Potential energy from the origin can be negative: no scale, and the checks must not wake up later with
+        // a yardstick from some window that happened to be positive (it was re-taken until it was).
+        InterfaceState s;
+        const std::string said = account_energy(limits, 1, 0.01, window(-4.0, 2.0, 0.0), InterfaceWork{}, s);
+        CHECK(said.find("-4 J/m, not positive") != std::string::npos);
+        CHECK(account_energy(limits, 2, 0.02, window(5.0, 2.0, 0.0), InterfaceWork{}, s).empty());
+        CHECK(account_energy(limits, 3, 0.03, window(50.0, 2.0, 0.0), InterfaceWork{}, s).empty());  // no stop
+    }
 }

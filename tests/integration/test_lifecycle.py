@@ -105,6 +105,13 @@ def test_version_mismatch_is_refused_and_logged():
     assert "refused a connection: participant 'structure' speaks protocol 99..99" in text, text
 
 
+def test_a_wrong_token_is_refused_in_the_agreed_version():
+    """The refusal is an ERROR in the protocol version agreed at WELCOME (docs/protocol.md 3.1): this participant
+    speaks version 1 only, and the coordinator's ERRORs once came as version 2 (a review, 2026-11-27)."""
+    text = run_fault("wrong_token", "sent a message with a wrong token", 5)
+    assert "misbehaving: answered with ERROR in protocol 1" in text, text
+
+
 def test_reply_with_a_wrong_seq_is_named():
     # Before 2026-11-25 the coordinator waited for the right seq for ever: the heartbeats kept it alive.
     run_fault("wrong_seq", "which answers no open request (open: ADVANCE", 5)

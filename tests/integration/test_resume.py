@@ -203,6 +203,30 @@ def test_a_resume_that_stops_before_catching_up_leaves_the_record_as_it_was():
         assert f.attrs["status"] == "completed" and f["frames/structure/time"].shape[0] == 21
 
 
+def test_a_resume_that_fails_after_catching_up_replaces_the_record():
+    """A resume that has reached where the interrupted record ends holds all of it; when the window that got
+    there then fails (here its frame: the participant answers SNAPSHOT at t = 0.5 s with ERROR), the record
+    is the resumed one, with this run's failure. The take-over once came only after the window's frames and
+    checkpoint, so such a resume was thrown away, and the log said it stopped "at t = 0.5 s, before t = 0.5 s"
+    (a review, 2026-11-27)."""
+    scene = os.path.join(harness.SCENES, "misbehaving.toml")
+    out = harness.out_dir("resume-fails-at-the-end")
+    settings = ["--set", 'structure.mode="snapshot_error"', "--set", "structure.fail_at=0.5", "--set",
+                "run.end_time=1.0", "--set", "run.output_interval=0.1", "--set", "run.checkpoint_interval=0.2"]
+    code, text = harness.sphfsi("run", scene, "--out", out, "--quiet", *settings, timeout=60)
+    assert code == 1 and "node 1 at NaN" in text, text
+    first = os.stat(os.path.join(out, "record.h5")).st_ino
+    code, text = harness.sphfsi("run", "--resume", out, "--quiet", timeout=60)
+    assert code == 1 and "node 1 at NaN" in text and "before t =" not in text, text
+    assert os.stat(os.path.join(out, "record.h5")).st_ino != first  # the resumed copy, renamed over it
+    assert not [n for n in os.listdir(out) if n.endswith(".resuming")]
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert f.attrs["status"].startswith("failed: ") and "node 1 at NaN" in f.attrs["status"], f.attrs["status"]
+        assert abs(f["windows/t"][-1] - 0.5) < 1e-12, f["windows/t"][:]
+        frames = f["frames/structure/time"][:]
+        assert len(frames) == 5 and max(abs(frames - [0.0, 0.1, 0.2, 0.3, 0.4])) < 1e-12, frames
+
+
 def test_a_resume_keeps_the_window_columns_of_the_interrupted_run():
     """The window columns are those of a run's first window (a stats name first sent later is named and not
     recorded, test_lifecycle.py), and the root totals sum them. A resume keeps both: it once chose the
@@ -238,6 +262,11 @@ def test_a_fresh_run_leaves_nothing_of_an_earlier_run_to_resume():
     harness.sphfsi("run", SCENE, "--out", out, "--quiet", "--overwrite", "--set", "run.end_time=0.05", "--set",
                    "run.output_interval=0.01", check=0, timeout=60)  # ends before its first checkpoint
     assert not os.path.exists(os.path.join(out, "checkpoint.bin"))
+    code, text = harness.sphfsi("run", "--resume", out)
+    assert code == 2 and "completed; there is nothing to resume" in text, (code, text)  # said first (a review)
+    import h5py
+    with h5py.File(os.path.join(out, "record.h5"), "r+", locking=False) as f:
+        f.attrs["status"] = "running"  # as if killed before its first checkpoint
     code, text = harness.sphfsi("run", "--resume", out)
     assert code == 1 and "no checkpoint at" in text, (code, text)
 

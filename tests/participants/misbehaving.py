@@ -34,6 +34,8 @@ section picks the fault:
   mode = "stats_late"     reports the ADVANCED stat "late" from its second window on (not a fault)
   mode = "bad_exit"       answers BYE with ACK, then exits with status 5
   mode = "hang_snapshot"  never answers SNAPSHOT while its heartbeats go on
+  mode = "snapshot_error" answers SNAPSHOT with ERROR diverged from t = fail_at on (a key of [structure])
+  mode = "wrong_token"    answers the first ADVANCE with a wrong token, then prints the reply's type and version
   mode = "stall"          never answers the first ADVANCE while its heartbeats go on, progress standing still
 Otherwise it answers like a structure that does not move.
 """
@@ -56,9 +58,10 @@ def main():
     lock = threading.Lock()
     beating = threading.Event()
 
-    def send(kind, seq, body, v=1):
+    def send(kind, seq, body, v=1, wrong_token=False):
         with lock:
-            sock.send(msgpack.packb({"v": v, "type": kind, "seq": seq, "token": token, "body": body}, use_bin_type=True))
+            sock.send(msgpack.packb({"v": v, "type": kind, "seq": seq, "token": "not-it" if wrong_token else token,
+                                     "body": body}, use_bin_type=True))
 
     def recv(timeout_s=10.0):
         end = time.time() + timeout_s
@@ -103,6 +106,7 @@ def main():
             continue
         if kind == "INIT":
             mode = body["config"].get("mode", mode)
+            fail_at = float(body["config"].get("fail_at", 0.0))
             info = {"info_bad_key": {"": 1}, "info_huge": {f"k{i}": i for i in range(200000)},
                     "info_twice": {"a.b": 1, "a": {"b": "x"}}, "info_software": {"software": "forged"},
                     "info_array": {"arr": [1, 2, 3]}}.get(mode, {})
@@ -132,6 +136,12 @@ def main():
                 time.sleep(3600)
             elif mode == "wrong_reply":
                 send("ACK", seq, {})
+            elif mode == "wrong_token":
+                send("ACK", seq, {}, wrong_token=True)
+                reply = recv(5.0)
+                while reply["type"] == "HEARTBEAT":
+                    reply = recv(5.0)
+                print(f"misbehaving: answered with {reply['type']} in protocol {reply['v']}", file=sys.stderr, flush=True)
             else:
                 now = body["t"] + body["dt"]
                 zero = f8(4, [0.0] * 8)
@@ -145,6 +155,8 @@ def main():
                       else {"late": 1.0} if mode == "stats_late" and body["t"] > 0 else {}})
         elif kind == "SNAPSHOT" and mode == "hang_snapshot":
             time.sleep(3600)
+        elif kind == "SNAPSHOT" and mode == "snapshot_error" and now >= fail_at - 1e-9:
+            send("ERROR", seq, {"code": "diverged", "message": f"frame at t = {now:g} s: node 1 at NaN", "in_reply_to": seq})
         elif kind == "SNAPSHOT":
             one = {"dtype": "f8", "shape": [1, 1], "data": struct.pack("<d", now)}
             fields = {"frame_time": {"time": one}, "frame_bad_name": {"": one},

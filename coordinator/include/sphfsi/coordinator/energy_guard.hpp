@@ -9,6 +9,7 @@
 //    interface balance does not (an explicit scheme without a predictor).
 // The running sums live in InterfaceState, so a resumed run continues them.
 #include <cstdint>
+#include <string>
 
 #include "sphfsi/coordinator/coupling.hpp"
 #include "sphfsi/coordinator/interface_energy.hpp"
@@ -19,12 +20,15 @@ namespace sphfsi::coordinator {
 struct EnergyLimits {
     double max_created = 1.0;     // coupling.max_created_energy (0: no check)
     double max_gain = 0.05;       // coupling.max_energy_gain (0: no check)
-    bool external_work = false;   // the scene does work on the pair (wind, a moving lid): no total check
+    bool external_work = false;   // the scene does work on the pair (wind, a moving lid, a body force along a
+                                  // periodic axis): no total check
 };
 
 // Adds the window to the sums in `s` and throws std::runtime_error("coupling diverged: ...") when a limit is
-// passed. A participant that does not report its energies in ADVANCED.stats gets no total check.
-void account_energy(const EnergyLimits& limits, std::uint64_t window, double t, const WindowOutcome& o,
-                    const InterfaceWork& work, InterfaceState& s);
+// passed. A participant that does not report its energies in ADVANCED.stats gets no total check. Returns a
+// warning to log, once, when the fluid's energy after the first window is not positive and the checks are
+// off for the run (empty otherwise).
+std::string account_energy(const EnergyLimits& limits, std::uint64_t window, double t, const WindowOutcome& o,
+                           const InterfaceWork& work, InterfaceState& s);
 
 }  // namespace sphfsi::coordinator
