@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "sphfsi/structure/frame_dynamics.hpp"
+#include "sphfsi/structure/heap.hpp"
 
 using namespace sphfsi;
 using namespace sphfsi::structure;
@@ -78,6 +79,7 @@ Result measure(int n, const char* formulation, int repeats, int steps) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    sphfsi::structure::keep_freed_memory();  // as sphfsi-structure does
     int repeats = 7, steps = 20;
     std::vector<int> sizes{10, 100, 1000};
     for (int i = 1; i < argc; ++i) {
