@@ -264,7 +264,15 @@ void Simulation2D::refresh_solid_rates() {
             // The solids' new densities change the matrices L of their fluid neighbours, and the pair terms
             // (L_i + L_j)/2 of those neighbours' own neighbours with them: mark that second ring too.
             mark_fluid_neighbours([&](std::uint32_t i) { return near_solid_[i] == 1 && P.kind[i] == Kind::Fluid; }, 2);
+            // L is built on the mask of the evaluation before it (P.div_r): the window-end evaluation used the
+            // one before that, a full evaluation now would use the window end's. Where the free surface moved,
+            // masks flip far from any solid (a review, 2026-11-27), so every particle whose L comes out
+            // different is recomputed too, with its neighbours.
+            correction_kept_ = correction_;
             update_correction(kg);
+            for (std::size_t i = 0; i < n; ++i)
+                if (!near_solid_[i] && correction_[i] != correction_kept_[i]) near_solid_[i] = 3;
+            mark_fluid_neighbours([&](std::uint32_t i) { return near_solid_[i] == 3; }, 4);
         }
         // The factors of all particles: the buffer is scratch (the sort reuses it), not state.
         compute_rates(P, grid_, kw, kg, ViscosityKernel<Dim>(h_), fill_rate_factors(), rates_, nullptr,

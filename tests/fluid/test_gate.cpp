@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "run_helpers.hpp"
+#include "sphfsi/fluid/gate.hpp"
 #include "scenes.hpp"
 
 using namespace fluid_test;
@@ -22,6 +23,21 @@ Value gated_column(double dp, double H, double speed) {
 }  // namespace
 
 TEST_SUITE("gate") {
+    TEST_CASE("the gate moves from t = 0 on: the first step's walls carry its speed, and it stops at its travel") {
+        // The step's forces are evaluated at its start, so a gate that reported rest at t = 0 would hold its
+        // walls still for the whole first step of its rise.
+        const sphfsi::fluid::GateLift lift{2.0, 0.2};
+        double offset = -1.0, velocity = -1.0;
+        lift.at(-1e-9, offset, velocity);
+        CHECK((offset == 0.0 && velocity == 0.0));
+        lift.at(0.0, offset, velocity);
+        CHECK((offset == 0.0 && velocity == 2.0));
+        lift.at(0.05, offset, velocity);
+        CHECK((offset == doctest::Approx(0.1).epsilon(1e-15) && velocity == 2.0));
+        lift.at(0.1, offset, velocity);
+        CHECK((offset == 0.2 && velocity == 0.0));
+    }
+
     TEST_CASE("a gate that has not risen holds the column with the hydrostatic thrust rho g H^2 / 2") {
         // Reference: the hydrostatic force on a vertical wall, rho g H^2 / 2 per metre (49.05 N/m for H = 0.1 m).
         // The gate rises at 1 nm/s: not at all within the run. Measured (2026-11-26), mean over t = 0.4 - 0.5 s:

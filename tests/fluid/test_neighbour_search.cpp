@@ -129,6 +129,18 @@ TEST_SUITE("neighbour_search") {
     TEST_CASE("a periodic axis shorter than three radii is refused") {
         CellGrid<2> grid;
         CHECK_THROWS_AS(grid.configure(Vec2{{0, 0}}, Vec2{{0.1, 1.0}}, 0.04, {true, false}), std::invalid_argument);
+        // Exactly three radii hold two of its cells, which are a hair wider: refused here and, by the same
+        // rule (grid_limits.hpp), by the scene check (fluid.scene).
+        CHECK(sphfsi::fluid::periodic_cells(0.09, 0.03) == 2.0);
+        CHECK_THROWS_AS(grid.configure(Vec2{{0, 0}}, Vec2{{0.09, 1.0}}, 0.03, {true, false}), std::invalid_argument);
+        grid.configure(Vec2{{0, 0}}, Vec2{{0.0901, 1.0}}, 0.03, {true, false});
+    }
+
+    TEST_CASE("more cells than 32-bit indices number are refused, not wrapped") {
+        // 1e5 x 1e5 cells of 1 mm: 1e10 (a cell index past 2^32 wrapped and binned particles into wrong cells).
+        CellGrid<2> grid;
+        CHECK_THROWS_AS(grid.configure(Vec2{{0, 0}}, Vec2{{100.0, 100.0}}, 0.001, {false, false}), std::invalid_argument);
+        grid.configure(Vec2{{0, 0}}, Vec2{{10.0, 10.0}}, 0.001, {false, false});  // 1e8: fine
     }
 }
 

@@ -10,6 +10,7 @@
 // and never moves two points further apart than they are. Clamping also keeps stray particles (outside
 // the domain given to build) in the border cells: slower, never wrong.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
@@ -18,6 +19,7 @@
 
 #include <omp.h>
 
+#include "sphfsi/fluid/grid_limits.hpp"
 #include "sphfsi/fluid/vec.hpp"
 
 namespace sphfsi::fluid {
@@ -37,23 +39,27 @@ public:
         lo_ = lo;
         periodic_ = periodic;
         // A hair larger than the radius so rounding in the binning can never separate a true pair by two cells.
-        const double size = radius * (1.0 + 1e-12);
-        ncells_ = 1;
+        const double size = radius * kCellOverSupport;
+        double cells = 1.0;  // counted in doubles first: an absurd domain must not overflow the count
+        std::array<double, Dim> along{};
         for (int k = 0; k < Dim; ++k) {
             const double len = hi[k] - lo[k];
             if (!(len >= 0.0)) throw std::invalid_argument("cell grid: empty or invalid domain");
-            if (periodic[k]) {
-                n_[k] = static_cast<int>(std::floor(len / size));
-                if (n_[k] < 3)
-                    throw std::invalid_argument("cell grid: periodic length " + std::to_string(len) +
-                                                " m is shorter than 3 support radii (" + std::to_string(3 * radius) + " m)");
-                cell_size_[k] = len / n_[k];
-                period_[k] = len;
-            } else {
-                n_[k] = std::max(1, static_cast<int>(std::ceil(len / size)));
-                cell_size_[k] = size;
-                period_[k] = 0.0;
-            }
+            along[static_cast<std::size_t>(k)] = periodic[k] ? periodic_cells(len, radius) : std::max(1.0, std::ceil(len / size));
+            if (periodic[k] && along[static_cast<std::size_t>(k)] < 3)
+                throw std::invalid_argument("cell grid: periodic length " + std::to_string(len) +
+                                            " m holds fewer than 3 cells of one support radius (" + std::to_string(radius) + " m)");
+            cells *= along[static_cast<std::size_t>(k)];
+        }
+        if (cells > kMaxCells)
+            throw std::invalid_argument("cell grid: " + std::to_string(cells) + " cells of " + std::to_string(radius) +
+                                        " m, more than its 32-bit cell indices number");
+        ncells_ = 1;
+        for (int k = 0; k < Dim; ++k) {
+            const double len = hi[k] - lo[k];
+            n_[k] = static_cast<int>(along[static_cast<std::size_t>(k)]);
+            cell_size_[k] = periodic[k] ? len / n_[k] : size;
+            period_[k] = periodic[k] ? len : 0.0;
             inv_size_[k] = 1.0 / cell_size_[k];
             ncells_ *= static_cast<std::size_t>(n_[k]);
         }

@@ -219,6 +219,7 @@ private:
     // particle instead of one per pair).
     std::vector<double> rho_scratch_;
     std::vector<Mat<Dim>> correction_;  // per particle L of the pressure correction, recomputed each evaluation
+    std::vector<Mat<Dim>> correction_kept_;  // scratch of refresh_solid_rates: the L the last evaluation used
     PcisphScratch<Dim> pci_;
     std::unique_ptr<std::ofstream> step_log_;
 };
