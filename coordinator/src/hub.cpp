@@ -157,7 +157,7 @@ void Hub::receive_all() {
         std::string id(static_cast<const char*>(identity.data()), identity.size());
         auto known = identity_role_.find(id);
         if (known == identity_role_.end()) {
-            handle_stranger(id, payload);
+            handle_stranger(id, payload, multipart);
             continue;
         }
         const std::string& role = known->second;
@@ -226,7 +226,7 @@ void Hub::file_reply(const std::string& role, Message m) {
     inbox_[role].insert_or_assign(seq, Reply{std::move(m), roundtrip});
 }
 
-void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) {
+void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload, bool multipart) {
     // A refusal echoes the stranger's own token (empty when unreadable), never this run's: the run token is
     // the only thing keeping another local process from joining, so it must not be handed out on request.
     std::string their_token;
@@ -253,8 +253,11 @@ void Hub::handle_stranger(const std::string& id, const zmq::message_t& payload) 
     if (!is_answered(m.type)) {  // once per connection: a stray peer's heartbeats would fill the log
         if (quiet_strangers_.insert(id).second)
             log_("ignored " + std::string(to_string(m.type)) + " from an unknown connection (further ones not logged)");
+        if (m.type == MessageType::Heartbeat && m.token == token_) stray_heartbeats_ = true;
         return;
     }
+    // One frame a message (docs/protocol.md 1), from the first on: after WELCOME a second frame ends the run.
+    if (multipart) return refuse(m.seq, "bad_message", "message has more than one frame");
     if (m.type != MessageType::Hello) return refuse(m.seq, "refused", "first message must be HELLO, got " + std::string(to_string(m.type)));
     if (m.token != token_) return refuse(m.seq, "bad_token", "HELLO carries a token that is not this run's (stale or stray participant)");
     const auto& h = m.as<Hello>();
@@ -306,7 +309,12 @@ void Hub::check_liveness() {
         double silent = seconds_since(peer.last_seen);
         if (silent > timing_.timeout_s)
             throw ParticipantFailure(role, "hung", "has been silent for " + fmt_s(silent) +
-                                                       " (no reply, no heartbeat; run.timeout_s = " + fmt_s(timing_.timeout_s) + ")");
+                                                       " (no reply, no heartbeat; run.timeout_s = " + fmt_s(timing_.timeout_s) + ")" +
+                                                       // The likely cause when this run's token came from another socket.
+                                                       (stray_heartbeats_ ? "; HEARTBEATs with this run's token came from a "
+                                                                            "connection that never said HELLO: a participant must "
+                                                                            "send them on the socket that said HELLO (docs/protocol.md 3.3)"
+                                                                          : ""));
         // Heartbeats prove the process lives, not that it computes: during an ADVANCE its sub-step count
         // must move; any other request (INIT, SNAPSHOT, CHECKPOINT, SAVE, RESTORE: no sub-steps) must be
         // answered within the same time.

@@ -105,6 +105,13 @@ def test_version_mismatch_is_refused_and_logged():
     assert "refused a connection: participant 'structure' speaks protocol 99..99" in text, text
 
 
+def test_heartbeats_from_another_socket_are_named_as_the_likely_cause():
+    """A participant whose heartbeat thread has a socket of its own (ZeroMQ's usual advice) is silent to the
+    coordinator, which knows a participant by the connection that said HELLO; the failure says so now (a
+    review, 2026-11-27: the message pointed elsewhere). This one also takes 3 s over its first ADVANCE."""
+    run_fault("heartbeat_own_socket", "must send them on the socket that said HELLO", 8)
+
+
 def test_a_wrong_token_is_refused_in_the_agreed_version():
     """The refusal is an ERROR in the protocol version agreed at WELCOME (docs/protocol.md 3.1): this participant
     speaks version 1 only, and the coordinator's ERRORs once came as version 2 (a review, 2026-11-27)."""
@@ -251,6 +258,12 @@ def test_stray_connection_is_refused_and_logged():
     reply = msgpack.unpackb(stray.recv(), raw=False)
     assert reply["body"]["code"] == "bad_message" and reply["seq"] == 9 and reply["body"]["in_reply_to"] == 9, reply
     assert reply["token"] == "" and reply["v"] == 1, reply  # HELLO unreadable: no token, the oldest version
+    # One frame a message, from the first on (docs/protocol.md 1): a HELLO in two frames was welcomed.
+    stray.send_multipart([msgpack.packb({"v": 1, "type": "HELLO", "seq": 11, "token": "0" * 32, "body": hello},
+                                        use_bin_type=True), b"more"])
+    assert stray.poll(5000)
+    reply = msgpack.unpackb(stray.recv(), raw=False)
+    assert reply["body"]["code"] == "bad_message" and "more than one frame" in reply["body"]["message"], reply
     # An ERROR is never answered, not even a stranger's (an answer could start a ping-pong of ERRORs).
     stray.send(msgpack.packb({"v": 1, "type": "ERROR", "seq": 10, "token": "0" * 32,
                               "body": {"code": "internal", "message": "stray", "in_reply_to": 0}}, use_bin_type=True))

@@ -36,6 +36,7 @@ section picks the fault:
   mode = "hang_snapshot"  never answers SNAPSHOT while its heartbeats go on
   mode = "snapshot_error" answers SNAPSHOT with ERROR diverged from t = fail_at on (a key of [structure])
   mode = "wrong_token"    answers the first ADVANCE with a wrong token, then prints the reply's type and version
+  mode = "heartbeat_own_socket"  sends its heartbeats on a second socket and takes 3 s over the first ADVANCE
   mode = "stall"          never answers the first ADVANCE while its heartbeats go on, progress standing still
 Otherwise it answers like a structure that does not move.
 """
@@ -86,9 +87,18 @@ def main():
 
     def heartbeat():
         n = 0
+        own = None
         while beating.is_set():
             n += 1
-            send("HEARTBEAT", 1000 + n, {"progress": 0 if stalled.is_set() else n})
+            if mode == "heartbeat_own_socket" and own is None:  # the mode comes with INIT
+                own = sock.context.socket(zmq.DEALER)  # the coordinator never heard HELLO on this one
+                own.setsockopt(zmq.LINGER, 0)
+                own.connect(args["--connect"])
+            if own is not None:
+                own.send(msgpack.packb({"v": 1, "type": "HEARTBEAT", "seq": 1000 + n, "token": token,
+                                        "body": {"progress": n}}, use_bin_type=True))
+            else:
+                send("HEARTBEAT", 1000 + n, {"progress": 0 if stalled.is_set() else n})
             time.sleep(0.2)
 
     beating.set()
@@ -136,6 +146,8 @@ def main():
                 time.sleep(3600)
             elif mode == "wrong_reply":
                 send("ACK", seq, {})
+            elif mode == "heartbeat_own_socket" and body["t"] == 0:
+                time.sleep(3.0)  # past the scene's timeout_s of 2 s, heartbeats going to the other socket
             elif mode == "wrong_token":
                 send("ACK", seq, {}, wrong_token=True)
                 reply = recv(5.0)

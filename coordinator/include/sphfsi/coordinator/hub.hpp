@@ -86,7 +86,7 @@ private:
     void pump(int wait_ms, bool interruptible = true);
     void wait_for_input(int wait_ms, bool interruptible);  // up to wait_ms, until a message is there
     void receive_all();
-    void handle_stranger(const std::string& identity, const zmq::message_t& payload);
+    void handle_stranger(const std::string& identity, const zmq::message_t& payload, bool multipart);
     void file_reply(const std::string& role, protocol::Message m);
     void check_liveness();
     [[noreturn]] void report_exit(const std::string& role, const std::string& how);
@@ -120,6 +120,7 @@ private:
     double messaging_s_ = 0.0;
     bool closing_ = false;  // goodbye() has begun
     std::set<std::string> quiet_strangers_;  // unknown connections whose unanswered messages were logged once
+    bool stray_heartbeats_ = false;          // an unknown connection sent HEARTBEAT with this run's token
 };
 
 }  // namespace sphfsi::coordinator
