@@ -342,7 +342,6 @@ double Simulation2D::stable_dt() {
         if (reach_dt < ss.dt) ss = {reach_dt, "PCISPH neighbour reach"};
     }
     if (!(ss.dt >= s_.dt_min)) {
-        step_dt_ = ss.dt;
         // The particles that set the speed and force limits, found only now: the reduction does not track them.
         const auto& P = st_.P;
         std::size_t fastest = P.size(), hardest = P.size();
@@ -351,6 +350,8 @@ double Simulation2D::stable_dt() {
             if (fastest == P.size() || norm2(P.v[i]) > norm2(P.v[fastest])) fastest = i;
             if (hardest == P.size() || norm2(P.a[i]) > norm2(P.a[hardest])) hardest = i;
         }
+        // PCISPH's |a| may be the last step's with its pressure, which P.a (the non-pressure part) cannot name.
+        const bool pressure_from_last = s_.pressure == PressureModel::Pcisph && st_.a_max_last > st_.a_max;
         auto who = [&](std::size_t i) {
             return i == P.size() ? std::string()
                                  : " (particle " + std::to_string(P.id[i]) + " at (" + fmt(P.x[i][0]) + ", " + fmt(P.x[i][1]) + ") m)";
@@ -359,7 +360,7 @@ double Simulation2D::stable_dt() {
                                           " s: time step = " + fmt(ss.dt) + " s (below the floor dt_min = " +
                                           fmt(s_.dt_min) + " s; limited by " + ss.limited_by + ", largest |u| = " +
                                           fmt(st_.u_max) + " m/s" + who(fastest) + ", largest |a| = " + fmt(a) +
-                                          " m/s^2" + who(hardest) + ")");
+                                          " m/s^2" + (pressure_from_last ? " (the last step's, pressure included)" : who(hardest)) + ")");
     }
     return ss.dt;
 }

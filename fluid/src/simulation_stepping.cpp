@@ -251,7 +251,6 @@ double Simulation2D::step_pcisph(double dt, double t_after, bool adaptive, Windo
 }
 
 double Simulation2D::take_step(double dt, double t_after, bool adaptive, WindowStats& ws) {
-    step_dt_ = dt;
     stepping_ = true;
     switch (s_.pressure == PressureModel::Pcisph ? Integrator::SymplecticEuler : s_.integrator) {
         case Integrator::SymplecticEuler:

@@ -208,7 +208,6 @@ private:
     State st_, saved_;
     bool has_saved_ = false;
     int threads_ = 1;
-    double step_dt_ = 0.0;  // dt of the step in progress (failure messages)
 
     // Scratch (not state). scratch_ is the staging area of the sort (reorder) and then holds the rate pass's
     // per-particle factors: the two uses never overlap, so one buffer serves both.
