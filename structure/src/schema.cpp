@@ -104,6 +104,8 @@ void check_points_on_nodes(const Value* entries, const std::string& path, const 
 
 void check_structure(const Value& s, const std::string& path, Errors& errors) {
     const auto members = members_of(s);
+    // Member errors point at the member's own table (its line in the scene), not at [structure].
+    auto member_value = [&](std::size_t i) { return &s.at("members").as_array()[i]; };
     if (members.empty()) {
         errors.add(&s, "key '" + path + ".members': at least one [[" + path + ".members]] is needed");
         return;
@@ -139,7 +141,7 @@ void check_structure(const Value& s, const std::string& path, Errors& errors) {
                     at_node = std::hypot(q.x - end.x, q.y - end.y) <= tol;
                 }
                 if (!at_node)
-                    errors.add(&s, "key '" + path + ".members[" + std::to_string(i) + "]': end " + show(end) +
+                    errors.add(member_value(i), "key '" + path + ".members[" + std::to_string(i) + "]': end " + show(end) +
                                        " lies on members[" + std::to_string(j) +
                                        "] between two of its nodes; members connect only at nodes, so choose "
                                        "n_elements of members[" + std::to_string(j) + "] to put a node there");
@@ -159,7 +161,7 @@ void check_structure(const Value& s, const std::string& path, Errors& errors) {
             const double lo = std::min(along(members[i].a), along(members[i].b)),
                          hi = std::max(along(members[i].a), along(members[i].b));
             if (std::min(hi, L) - std::max(lo, 0.0) > tol)
-                errors.add(&s, "key '" + path + ".members[" + std::to_string(i) + "]': lies along members[" +
+                errors.add(member_value(i), "key '" + path + ".members[" + std::to_string(i) + "]': lies along members[" +
                                    std::to_string(j) + "] over a common stretch; members may meet at nodes but not overlap");
         }
 
