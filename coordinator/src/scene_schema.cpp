@@ -90,7 +90,8 @@ void coupling_section(schema::TableSchema& s) {
     // t = 0.16 s and reached 1.7 and 11 times it by t = 0.4 s.
     c.number("max_created_energy",
              "Stop the run as diverged when the energy the coupling has created at the interface exceeds this "
-             "multiple of the fluid's mechanical energy after the first window (docs/coupling.md); 0 = never.")
+             "multiple of the fluid's mechanical energy after the first window; off when that energy is not "
+             "positive (docs/coupling.md); 0 = never.")
         .at_least(0).fallback(1.0);
     // 0.05: stable coupled runs rose at most 0.2 % of E_f above their first window (elastic gate at 1 and 2 mm,
     // thesis and multi-rate windows; elastic obstacle at 2 mm to 1 s; the added-mass plate at mass ratios

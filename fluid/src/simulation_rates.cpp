@@ -267,12 +267,14 @@ void Simulation2D::refresh_solid_rates() {
             // L is built on the mask of the evaluation before it (P.div_r): the window-end evaluation used the
             // one before that, a full evaluation now would use the window end's. Where the free surface moved,
             // masks flip far from any solid (a review, 2026-11-27), so every particle whose L comes out
-            // different is recomputed too, with its neighbours.
+            // different is recomputed too, with its neighbours, whichever ring it is in (a second-ring
+            // particle's neighbours are in no ring of their own).
             correction_kept_ = correction_;
             update_correction(kg);
+            auto changed = [&](std::uint32_t i) { return correction_[i] != correction_kept_[i]; };
             for (std::size_t i = 0; i < n; ++i)
-                if (!near_solid_[i] && correction_[i] != correction_kept_[i]) near_solid_[i] = 3;
-            mark_fluid_neighbours([&](std::uint32_t i) { return near_solid_[i] == 3; }, 4);
+                if (!near_solid_[i] && changed(static_cast<std::uint32_t>(i))) near_solid_[i] = 3;
+            mark_fluid_neighbours(changed, 4);
         }
         // The factors of all particles: the buffer is scratch (the sort reuses it), not state.
         compute_rates(P, grid_, kw, kg, ViscosityKernel<Dim>(h_), fill_rate_factors(), rates_, nullptr,

@@ -73,7 +73,8 @@ TEST_SUITE("scene") {
         // Exactly 3 supports (0.09 m at dp = 0.01): the grid holds 2 cells there and refused it at INIT.
         CHECK(problems(with(dam_break(0.01), {{"periodic", "x"}, {"tank.width", 0.09}, {"tank.closed_top", true}}))
                   .find("tank.width': 0.09 m; a periodic axis must be longer than 3 kernel support radii") != std::string::npos);
-        // A grid of more cells than 32-bit indices number: 100 x 100 m at a support of 1.5 mm, 4.4e9 cells.
+        // A grid of more cells than 32-bit indices number: 100 x 100 m at a support of 1.5 mm, with the head
+        // room above an open top 8.9e9 cells.
         CHECK(problems(with(dam_break(0.0005), {{"tank.width", 100.0}, {"tank.height", 100.0}}))
                   .find("grid cell indices are 32-bit") != std::string::npos);
         CHECK(problems(with(dam_break(0.005), {{"kernel", "quartic"}})).find("allowed: one of") != std::string::npos);

@@ -7,7 +7,7 @@ namespace sphfsi::coordinator {
 const char* window_rule_legend() {
     return "0 = thesis (one fluid step; structure n = int(dt_f/dt_s)+1), 1 = multi-rate (several fluid steps), "
            "2 = fixed (coupling.window_dt), 3 = fluid alone (to the next output), 4 = structure alone (to the next "
-           "output; its wanted step under a ramp or sine load); "
+           "output; its wanted step under a ramp or sine load, at most 1/(20 f) under a sine); "
            "with coupling.structure_steps = \"window\" the structure takes one step per coupled window";
 }
 
