@@ -48,6 +48,17 @@ TEST_CASE("linear stiffness: symmetric, three zero-energy rigid modes") {
     for (const Vec6& m : {tx, ty, rot}) CHECK((K * m).norm() <= 1e-10 * K.norm());
 }
 
+TEST_CASE("the lumped mass is HRZ's diagonal") {
+    // Hinton, Rock & Zienkiewicz (1976) for the cubic beam: m/2 at each node in translation and the
+    // consistent matrix's rotary terms scaled to the same total, m L^2 / 78 (the modal test shows the
+    // frequencies it gives; this pins the entries, which the element's total mass alone does not).
+    const Element e = make_element(0.9);
+    const double m = e.rhoA * e.L0;
+    Mat6 hrz = Mat6::Zero();
+    hrz.diagonal() << m / 2, m / 2, m * e.L0 * e.L0 / 78, m / 2, m / 2, m * e.L0 * e.L0 / 78;
+    CHECK((lumped_mass(e) - hrz).norm() <= 1e-15 * hrz.norm());
+}
+
 TEST_CASE("mass matrices carry the element mass in both directions") {
     for (double beta : {0.0, 0.9, 2.5}) {
         const Element e = make_element(beta);

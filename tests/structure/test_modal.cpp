@@ -45,18 +45,20 @@ TEST_CASE("cantilever, 20 consistent-mass elements: first three frequencies with
     }
 }
 
-TEST_CASE("cantilever, 20 lumped-mass (HRZ) elements: mode 1 within 0.5 %, modes 2-3 within 1.5 %") {
-    // Our own criterion: lumping converges from below at O((beta h)^2), so the error grows with the
-    // mode number; the bounds are twice the errors seen on this mesh rounded up (0.2 %, 0.5 %, 0.9 %)
-    // and confirm that lumping is implemented, not merely that it is different.
+TEST_CASE("cantilever, 20 lumped-mass (HRZ) elements: frequencies below the exact ones by lumping's own error") {
+    // Our own criterion: lumping converges from below at O((beta h)^2), so the deficit grows with the
+    // mode number: measured on this mesh 0.13 %, 0.50 % and 0.89 %. Each must lie within half and twice
+    // that. The lower bound is what shows lumping is applied: the consistent mass errs by 1e-5 at most
+    // (above), so a "lumped" run that used it would fail here (it passed the previous, one-sided checks).
     Value s = beam(20);
     set(s, "mass", Value("lumped"));
     const FrameDynamics f(config(s));
+    const double seen[3] = {1.29e-3, 4.99e-3, 8.92e-3};
     for (int n = 0; n < 3; ++n) {
-        const double err = rel(f.modes().omega(n), omega_exact(n));
-        MESSAGE("lumped mode " << n + 1 << ": " << f.modes().omega(n) << " rad/s, relative error " << err);
-        CHECK(err <= (n == 0 ? 5e-3 : 1.5e-2));
-        CHECK(f.modes().omega(n) < omega_exact(n) * (1 + 1e-4));  // lumped mass: from below
+        const double deficit = 1.0 - f.modes().omega(n) / omega_exact(n);
+        MESSAGE("lumped mode " << n + 1 << ": " << f.modes().omega(n) << " rad/s, below the exact one by " << deficit);
+        CHECK(deficit >= 0.5 * seen[n]);
+        CHECK(deficit <= 2.0 * seen[n]);
     }
 }
 
@@ -130,15 +132,28 @@ TEST_CASE("a fine free or pinned beam: the elastic modes by subspace iteration, 
         REQUIRE(f.modes().rigid_body == rigid);
         CHECK(rel(f.modes().omega(rigid), b1 * b1 * scale) <= 1e-4);
         CHECK(rel(f.modes().omega(rigid + 1), b2 * b2 * scale) <= 1e-4);
-        // The rigid modes are exact: no strain (K phi = 0 to round-off of K's largest entries; the deflation
-        // sets their omega^2 to 0, so that is checked on the shape itself), mass-normalized.
-        const Eigen::VectorXd phi = f.modes().shapes.col(0);
-        const Eigen::VectorXd K_phi = f.stiffness() * phi;
-        double k_max = 0.0;
-        for (int k = 0; k < f.stiffness().outerSize(); ++k)
-            for (SparseMatrix::InnerIterator it(f.stiffness(), k); it; ++it) k_max = std::max(k_max, std::abs(it.value()));
-        CHECK(K_phi.lpNorm<Eigen::Infinity>() <= 1e-9 * k_max * phi.lpNorm<Eigen::Infinity>());
-        CHECK(f.modes().shapes.col(0).dot(f.mass() * f.modes().shapes.col(0)) == doctest::Approx(1.0).epsilon(1e-12));
+        // The rigid modes are exact rigid motions, mass-normalized. Checked on the shapes themselves (the
+        // deflation sets their omega^2 to 0): each lies in the span of the analytic rigid motions the supports
+        // allow, x and y translation and rotation about the origin when free, rotation about the pin at the
+        // origin when pinned (u = -theta y, v = theta x, rotation theta at every node). Residual 1e-9 of the
+        // shape: round-off is ~1e-13 here, while an elastic mode is O(1) away from that span. (K phi, checked
+        // before against 1e-9 of K's largest entry, let the first dozen elastic modes pass as rigid.)
+        const auto& nodes = f.model().nodes;
+        Eigen::MatrixXd R = Eigen::MatrixXd::Zero(3 * static_cast<Eigen::Index>(nodes.size()), rigid);
+        for (std::size_t i = 0; i < nodes.size(); ++i) {
+            const auto k = 3 * static_cast<Eigen::Index>(i);
+            R(k, rigid - 1) = -nodes[i].y(), R(k + 1, rigid - 1) = nodes[i].x(), R(k + 2, rigid - 1) = 1.0;
+            if (rigid == 3) R(k, 0) = 1.0, R(k + 1, 1) = 1.0;
+        }
+        for (int c = 0; c < rigid; ++c) {
+            const Eigen::VectorXd phi = f.modes().shapes.col(c);
+            const Eigen::VectorXd fit = R * R.colPivHouseholderQr().solve(phi);
+            CHECK((phi - fit).norm() <= 1e-9 * phi.norm());
+            CHECK(phi.dot(f.mass() * phi) == doctest::Approx(1.0).epsilon(1e-12));
+        }
+        // And the first elastic mode is not in that span (the check can fail).
+        const Eigen::VectorXd elastic = f.modes().shapes.col(rigid);
+        CHECK((elastic - R * R.colPivHouseholderQr().solve(elastic)).norm() > 0.1 * elastic.norm());
     }
 }
 

@@ -65,7 +65,7 @@ TEST_CASE("init publishes the interface and the step it wants") {
     REQUIRE(r.interface);
     CHECK(r.interface->vertices.shape == std::vector<std::uint64_t>{22, 2});
     CHECK(r.interface->cells.shape == std::vector<std::uint64_t>{10, 4});
-    CHECK(r.dt_wanted == doctest::Approx(std::min(1e-3, s.dynamics().dt_accuracy())));
+    CHECK(r.dt_wanted == doctest::Approx(std::min(1e-3, s.dynamics().dt_accuracy())).scale(0).epsilon(1e-12));
     CHECK(r.info.at("elements").as_int() == 10);
     CHECK(r.info.at("natural_frequencies_hz").at("mode_1").as_double() == doctest::Approx(8.355).epsilon(1e-3));
     CHECK(s.kind() == "structure");
@@ -341,7 +341,9 @@ TEST_CASE("errors carry the protocol's codes") {
 
 TEST_CASE("structure alone: a slowly ramped tip load settles on the static deflection P L^3 / (3 EI)") {
     // Standalone run under the scene's own time-varying load: ramp over 2 s, heavy Rayleigh damping
-    // (20 %), run to 4 s. Quasi-static up to a residual dynamic part well below 1 %.
+    // (20 %), run to 4 s. Cubic elements are exact at the nodes for a tip load, and what the ramp leaves
+    // swinging (about 1 % at omega T = 105) decays for 2 s at 20 % damping, by exp(-0.2 x 52.5 x 2) = 1e-9:
+    // tolerance 1e-6 (measured below printing precision).
     Value s = beam(10);
     Value load = point_load(L, 0, 0, -500.0);
     set(load, "history", Value("ramp"));
@@ -360,8 +362,8 @@ TEST_CASE("structure alone: a slowly ramped tip load settles on the static defle
     while (t < 4.0 - 1e-9) t = solver.advance(window(t, 0.1, 0), p).t;
     const double tip = std::get<F64Array>(solver.snapshot().at("displacement"))(10, 1);
     const double want = -500.0 * L * L * L / (3 * EI);
-    MESSAGE("tip " << tip << " vs static " << want);
-    CHECK(rel(tip, want) <= 0.01);
+    MESSAGE("tip " << tip << " vs static " << want << ", relative error " << rel(tip, want));
+    CHECK(rel(tip, want) <= 1e-6);
 }
 
 TEST_CASE("a window reports the largest Newton residual its steps ended on") {
