@@ -549,10 +549,14 @@ TEST_SUITE("adapter") {
         CHECK(Fx == doctest::Approx(fx).epsilon(1e-12));
         CHECK(Fy == doctest::Approx(fy).epsilon(1e-12));
         // Accelerated upward at 50 m/s^2, the plate drags its added mass (rho pi (b/2)^2 ~ 7.9 kg/m for a
-        // flat plate of width b = 0.1 m in unbounded fluid: ~ -390 N/m): the fluid pushes it down.
+        // flat plate of width b = 0.1 m in unbounded fluid: ~ -390 N/m): the fluid pushes it down. An order
+        // of magnitude only, not a validation (docs/validation.md, "Added mass", is one): one step of a weakly
+        // compressible fluid carries the part of the added mass within reach of the wall, and the plate is
+        // 4 dp thick in a tank; measured -225 N/m, checked within a quarter and 1.5 times the estimate.
         MESSAGE("force on the accelerating plate: (", Fx, ", ", Fy, ") N/m");
-        CHECK(std::isfinite(Fx));
-        CHECK(Fy < -100.0);
+        CHECK(std::abs(Fx) <= 1e-9 * std::abs(Fy));  // the plate is symmetric about its middle
+        CHECK(Fy < -390.0 / 4);
+        CHECK(Fy > -390.0 * 1.5);
     }
 
     // Velocity Verlet evaluates at each step's end: on a window's last step that must be the window's end

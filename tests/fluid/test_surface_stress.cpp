@@ -21,7 +21,8 @@ using namespace sphfsi::fluid;
 namespace {
 
 constexpr double dp = 0.01, h = 1.5 * dp, rho0 = 1000.0, mass = rho0 * dp * dp, L = 40 * dp;
-const Vec2 tau{{2.0, 0.5}};  // a y part too, so that the y total is checked against something
+const Vec2 tau{{2.0, 0.5}};  // a y part too: each share is tau times a scalar, so both totals must carry the same share
+                              // (a dropped or swapped component fails; it is not an independent check of the y total)
 
 struct Layer {
     std::vector<Vec2> x;

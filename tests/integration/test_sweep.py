@@ -181,8 +181,10 @@ def test_mesh_sweep_rows_columns_and_errors():
         static = [num(r["static.rel_error"]) for _, r in series]
         print(f"{integrator}: f1 relative errors {['%.3g' % e for e in f1]} for n = 2, 4, 8; "
               f"static tip deflection errors {['%.2g' % e for e in static]}")
-        # O(h^4): 16 per halving asymptotically; at least 8 here, and errors strictly positive (from above).
+        # O(h^4): 16 per halving asymptotically; at least 8 here. From above: consistent mass gives a
+        # Rayleigh-Ritz upper bound (rel_error is |f - f_exact| / f_exact, so the sign is checked on the values).
         assert all(e > 0 for e in f1) and f1[0] / f1[1] > 8 and f1[1] / f1[2] > 8, f1
+        assert all(num(r["f1.value"]) > num(r["f1.exact"]) for _, r in series), [r["f1.value"] for _, r in series]
         # Nodally exact: round-off of the 12 digits watchpoints.csv keeps.
         assert all(0 <= e < 1e-9 for e in static), static
         for _, r in series:
@@ -924,8 +926,11 @@ label = "density"
         assert int(r["front.n_points"]) == 9
         # What the columns must hold, not a validation (test_dam_break.cpp is): WCSPH leads the experiment by
         # 10 - 20 % at every point from T = 0.84 on, so its mean is under 0.25 (measured 0.061 - 0.131,
-        # docs/validation.md), and its densities stay within the 1 % weak compressibility aims at, with the
-        # impact's peaks: under 5 % (measured 0.5 - 0.65 %).
+        # docs/validation.md). The density column is the fluid's per-step largest compression with the scene's
+        # own settings (not the methods sweep's, whose WCSPH stays at 0.5 - 0.65 %): measured 3.3 % at a/10 and
+        # 4.4 % at a/20 over the whole run (which ends at T = 2.7, before the surge meets the far wall); under 5 %.
+        # (An earlier comment here quoted the sweep's 0.5 - 0.65 % for these runs; a review's suggested 1 %
+        # bound failed on them.)
         assert 0 < num(r["front.mean_rel"]) < 0.25, r["front.mean_rel"]
         assert 0 < num(r["density.max"]) < 0.05, r["density.max"]
 
