@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include <msgpack.hpp>
+
 #include "sphfsi/coordinator/checkpoint.hpp"
 
 using namespace sphfsi;
@@ -152,14 +154,30 @@ TEST_SUITE("checkpoint") {
 
     TEST_CASE("a damaged checkpoint is refused, never read past its end") {
         const auto file = scratch("damaged");
-        // A single positive integer (the reviewer's one-byte file), a version string alone, and the header
-        // followed by an empty interface array (14 entries whose 12th is []).
+        // A single positive integer (the reviewer's one-byte file), a version string alone, and a checkpoint
+        // whose interface (its 12th entry) is an empty array.
         write_bytes(file, std::string(1, '\x0e'));
         check_refused(file);
         write_bytes(file, "\xb3sphfsi-checkpoint-1");
         check_refused(file);
         write_checkpoint(file, sample());
         std::string bytes = read_bytes(file);
+        {  // The sample with its 12th entry (the interface) replaced by [], built as such: the byte loop below
+           // makes it too, but would pass a file that was read.
+            const msgpack::object_handle h = msgpack::unpack(bytes.data(), bytes.size());
+            const msgpack::object& top = h.get();
+            REQUIRE(top.type == msgpack::type::ARRAY);
+            const std::uint32_t n = top.via.array.size;  // 15 entries since the loop times
+            REQUIRE(n > 11);
+            msgpack::sbuffer out;
+            msgpack::packer<msgpack::sbuffer> pk(out);
+            pk.pack_array(n);
+            for (std::uint32_t k = 0; k < n; ++k)
+                if (k == 11) pk.pack_array(0);
+                else pk.pack(top.via.array.ptr[k]);
+            write_bytes(file, std::string(out.data(), out.size()));
+            check_refused(file);
+        }
         // Every single byte changed to each of a few values that change a type (nil, an empty array or
         // map, a large positive integer): refused or read, never a crash.
         const std::string original = bytes;

@@ -44,6 +44,13 @@ TEST_SUITE("energy_guard") {
         }
         MESSAGE(what);
         CHECK(what.find("coupling diverged: window 3") != std::string::npos);
+        // Below zero too: the loads did 13 J/m, the pair holds 12, so the baseline is -1 J/m.
+        InterfaceState n;
+        account_energy(limits, 1, 0.01, window(10.0, 2.0, 13.0), InterfaceWork{}, n);
+        CHECK(n.total_energy == -1.0);
+        account_energy(limits, 2, 0.02, window(10.0, 2.0, 13.0), InterfaceWork{}, n);
+        CHECK_THROWS_WITH_AS(account_energy(limits, 3, 0.03, window(11.0, 2.0, 13.0), InterfaceWork{}, n),
+                             doctest::Contains("coupling diverged: window 3"), std::runtime_error);
     }
 
     TEST_CASE("the fluid's yardstick is the first window's; not positive, the checks are off and say so once") {

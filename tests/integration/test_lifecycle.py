@@ -78,12 +78,15 @@ SLACK_S = 1.5
 
 
 def named_then_reaped(run, needle, timeout_s):
-    """The failure line appears within timeout_s (+ slack) of now, and the coordinator exits within the
-    shutdown budget (+ slack) after it; returns (exit code, stderr)."""
+    """The failure line appears within timeout_s (+ slack) of now, not before timeout_s less one heartbeat
+    (0.6 s: the last message heard may precede now by up to a heartbeat, 0.5 s in these scenes; a
+    participant named silent at once would be a false alarm), and the coordinator exits within the shutdown
+    budget (+ slack) after it; returns (exit code, stderr)."""
     start = time.time()
     run.wait_for(needle, timeout=timeout_s + SLACK_S + 5)
     named = time.time() - start
     assert named < timeout_s + SLACK_S, f"named after {named:.1f} s (timeout {timeout_s} s)"
+    assert named >= timeout_s - 0.6, f"named after {named:.1f} s, before the timeout of {timeout_s} s"
     code, text = run.finish(timeout=SHUTDOWN_S + 10)
     reaped = time.time() - start - named
     assert reaped < SHUTDOWN_S + SLACK_S, f"exited {reaped:.1f} s after naming it (shutdown budget {SHUTDOWN_S} s)"

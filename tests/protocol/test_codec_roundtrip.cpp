@@ -1,6 +1,9 @@
 // Every message type of docs/protocol.md survives encode -> decode unchanged.
 #include <doctest/doctest.h>
 
+#include <cmath>
+#include <cstring>
+
 #include "sphfsi/protocol/codec.hpp"
 
 using namespace sphfsi;
@@ -121,6 +124,11 @@ TEST_CASE("ADVANCE and ADVANCED round-trip with binary arrays, bit for bit") {
     CHECK(ga.substeps == 3);
     CHECK(ga.iteration == 2);
     CHECK(std::get<F64Array>(ga.inputs.at("force")) == f);
+    // Bit for bit: == on doubles takes -0.0 for 0.0, so the bytes are compared too.
+    const auto& back = std::get<F64Array>(ga.inputs.at("force")).values;
+    REQUIRE(back.size() == f.values.size());
+    CHECK(std::memcmp(back.data(), f.values.data(), back.size() * sizeof(double)) == 0);
+    CHECK(std::signbit(back[3]));
 
     AdvanceReply b;
     b.t = 0.50001;
