@@ -1,5 +1,7 @@
 #include "sphfsi/protocol/schema.hpp"
 
+#include "sphfsi/protocol/codec.hpp"
+
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -202,7 +204,9 @@ Value TableSchema::validate(const Value& input, const std::string& path, Errors&
         if (!known) {
             std::vector<std::string> names;
             for (const Field& f : fields_) names.push_back(f.name());
-            errors.add(&v, "unknown key '" + join(path, key) + "'; allowed keys here: " +
+            // The key is the scene's or the sender's own text: quoted escaped (a control character such as
+            // ESC would reach a terminal through the log as it is; a review, 2026-11-27).
+            errors.add(&v, "unknown key '" + join(path, protocol::printable(key)) + "'; allowed keys here: " +
                                (names.empty() ? std::string("none") : quoted_list(names)));
         }
     }
