@@ -4,6 +4,7 @@
 #include <cctype>
 
 #include "number_text.hpp"
+#include "sphfsi/protocol/codec.hpp"
 #include "sphfsi/coordinator/scene.hpp"
 #include "sphfsi/coordinator/scene_cross_checks.hpp"
 #include "sphfsi/fluid/schema.hpp"
@@ -142,7 +143,7 @@ void check_watchpoint_names(const Value& scene, schema::Errors& e) {
         for (std::size_t j = 0; j < i; ++j)
             if (list[i].at("name").as_string() == list[j].at("name").as_string())
                 e.add(&list[i].at("name"), "key 'watchpoint[" + std::to_string(i) + "].name': \"" +
-                                               list[i].at("name").as_string() + "\" is watchpoint[" + std::to_string(j) +
+                                               protocol::printable(list[i].at("name").as_string()) + "\" is watchpoint[" + std::to_string(j) +
                                                "]'s name too; allowed: a name of its own");
 }
 

@@ -29,7 +29,7 @@ std::string quoted_list(const std::vector<std::string>& xs) {
     return out;
 }
 std::string describe(const Value& v) {
-    if (v.is_string()) return "\"" + v.as_string() + "\"";
+    if (v.is_string()) return "\"" + protocol::printable(v.as_string()) + "\"";  // the sender's text: escaped
     if (v.is_int()) return std::to_string(v.as_int());
     if (v.is_double()) return fmt(v.as_double());
     if (v.is_bool()) return v.as_bool() ? "true" : "false";

@@ -82,6 +82,7 @@ int main(int argc, char** argv) {
         const double t = 1e-3 * frame;
         for (int w = 0; w < 5; ++w) {  // a few coupling windows per frame, as a run records
             disp.values[0] = t;
+            force.values[1] = -t;  // not zero: a row counted before its data was written reads as zeros
             rec.append_window({{"t", t + 2e-4 * w}, {"dt", 2e-4}, {"iterations", 1.0}}, &disp, &force);
         }
         fill(frame, position, pressure, tag);

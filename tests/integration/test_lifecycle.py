@@ -79,7 +79,7 @@ SLACK_S = 1.5
 
 def named_then_reaped(run, needle, timeout_s):
     """The failure line appears within timeout_s (+ slack) of now, not before timeout_s less one heartbeat
-    (0.6 s: the last message heard may precede now by up to a heartbeat, 0.5 s in these scenes; a
+    (0.6 s: the last message heard may precede now by up to a heartbeat, 0.2 and 0.5 s in these scenes; a
     participant named silent at once would be a false alarm), and the coordinator exits within the shutdown
     budget (+ slack) after it; returns (exit code, stderr)."""
     start = time.time()

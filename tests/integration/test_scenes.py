@@ -68,6 +68,38 @@ def test_nothing_runs_on_an_invalid_scene():
     assert not os.path.exists(out), "an output directory was created for an invalid scene"
 
 
+def test_a_members_mistake_names_its_own_line():
+    """A geometry mistake of one member points at that member's [[structure.members]] table (line 16 here),
+    not at [structure] (line 6), where the message once pointed (a review, 2026-11-27)."""
+    path = os.path.join(harness.out_dir("member-line"), "scene.toml")
+    with open(path, "w") as f:
+        f.write("""[run]
+end_time = 0.1
+
+# a structure whose second member lies along the first
+
+[structure]
+[structure.material]
+E = 2.1e11
+rho = 7850.0
+[structure.section]
+thickness = 0.02
+[[structure.members]]
+start = [0.0, 0.0]
+end = [1.0, 0.0]
+n_elements = 10
+[[structure.members]]
+start = [0.0, 0.0]
+end = [1.0, 0.0]
+n_elements = 10
+[[structure.supports]]
+at = [0.0, 0.0]
+type = "clamped"
+""")
+    code, text = harness.sphfsi("check", path)
+    assert code == 2 and "line 16: key 'structure.members[1]': lies along members[0]" in text, text
+
+
 def test_missing_file_is_named():
     code, text = harness.sphfsi("check", "/nonexistent/scene.toml")
     assert code == 2 and "/nonexistent/scene.toml: cannot read the scene file" in text, text
@@ -95,6 +127,8 @@ MISTAKES_FOUND_LATE = [
     ("beam_only", ["structure.initial.mode=4294967297", "structure.initial.mode_amplitude=0.01"],
      "beyond the 32-bit range every integer key is read into"),
     ("beam_only", ["structure.initial.mode_amplitude=0.01"], "key 'structure.initial.mode_amplitude': set without"),
+    # A value quoted in an error is escaped: an ESC from the scene reached the terminal as it was.
+    ("beam_only", ['structure.formulation="lin\\u001bear"'], 'got "lin\\x1bear"'),
     ("beam_only", ["run.timeout_s=0.5"],
      "key 'run.timeout_s': run.heartbeat_s = 0.5 s (the default) must be at most half of run.timeout_s = 0.5 s"),
     ("beam_only", ["load.force=[0.0,-100.0]", "load.frequency=50.0"], "key 'load.frequency': used only with load.profile"),

@@ -924,9 +924,9 @@ label = "density"
         assert int(r["fluid_particles"]) == fluid_now
         assert int(r["particle_steps"]) == fluid_now * substeps == int(r["fluid_particles"]) * int(r["fluid_substeps"])
         assert int(r["front.n_points"]) == 9
-        # What the columns must hold, not a validation (test_dam_break.cpp is): WCSPH leads the experiment by
-        # 10 - 20 % at every point from T = 0.84 on, so its mean is under 0.25 (measured 0.061 - 0.131,
-        # docs/validation.md). The density column is the fluid's per-step largest compression with the scene's
+        # What the columns must hold, not a validation (test_dam_break.cpp is): a mean error of the front under
+        # 0.25 (these runs, with the scene's own settings, measure 0.073 at a/10 and 0.116 at a/20; the methods
+        # sweep's runs 0.036 - 0.131, docs/validation.md). The density column is the fluid's per-step largest compression with the scene's
         # own settings (not the methods sweep's, whose WCSPH stays at 0.5 - 0.65 %): measured 3.3 % at a/10 and
         # 4.4 % at a/20 over the whole run (which ends at T = 2.7, before the surge meets the far wall); under 5 %.
         # (An earlier comment here quoted the sweep's 0.5 - 0.65 % for these runs; a review's suggested 1 %
