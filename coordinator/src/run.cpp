@@ -25,6 +25,7 @@
 #include "sphfsi/coordinator/recorder.hpp"
 #include "sphfsi/coordinator/scene.hpp"
 #include "sphfsi/coordinator/scene_warnings.hpp"
+#include "sphfsi/fluid/schema.hpp"
 #include "sphfsi/coordinator/version.hpp"
 #include "sphfsi/coordinator/watchpoints.hpp"
 
@@ -377,10 +378,9 @@ bool Runner::fluid_does_external_work() const {
                 return true;
         return false;
     };
-    const Value* periodic = find_path(scene_.tree, "fluid.periodic");
-    const std::string axes = periodic && periodic->is_string() ? periodic->as_string() : "none";
-    const bool driven_along_period = ((axes == "x" || axes == "xy") && nonzero("fluid.gravity", 0)) ||
-                                     ((axes == "y" || axes == "xy") && nonzero("fluid.gravity", 1));
+    const Value* section = scene_.tree.find("fluid");
+    const sphfsi::fluid::PeriodicAxes axes = section ? sphfsi::fluid::periodic_axes(*section) : sphfsi::fluid::PeriodicAxes{};
+    const bool driven_along_period = (axes.x && nonzero("fluid.gravity", 0)) || (axes.y && nonzero("fluid.gravity", 1));
     return nonzero("fluid.free_surface.wind_shear") || nonzero("fluid.tank.lid_velocity") || driven_along_period;
 }
 

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "number_text.hpp"
+#include "sphfsi/fluid/schema.hpp"
 
 namespace sphfsi::coordinator {
 namespace {
@@ -58,9 +59,8 @@ std::vector<WettedMember> wetted_members(const Value& structure) {
 void check_structure_in_tank(const Value& fluid, const std::vector<WettedMember>& wetted, Errors& e) {
     const Value& tank = fluid.at("tank");
     const double wall = static_cast<double>(tank.at("wall_layers").as_int()) * fluid.at("dp").as_double();
-    const std::string periodic = fluid.at("periodic").as_string();
-    const double x_wall = periodic == "x" || periodic == "xy" ? 0.0 : wall;
-    const double y_wall = periodic == "y" || periodic == "xy" ? 0.0 : wall;
+    const sphfsi::fluid::PeriodicAxes periodic = sphfsi::fluid::periodic_axes(fluid);
+    const double x_wall = periodic.x ? 0.0 : wall, y_wall = periodic.y ? 0.0 : wall;
     const double W = tank.at("width").as_double(), H = tank.at("height").as_double();
     for (const WettedMember& m : wetted)
         for (const auto& [x, y] : m.corners())
@@ -68,7 +68,7 @@ void check_structure_in_tank(const Value& fluid, const std::vector<WettedMember>
                 e.add(&fluid.at("tank"), "key 'structure.members[" + std::to_string(m.index) + "]': its wetted cross-section reaches (" +
                                              shortest(x) + ", " + shortest(y) + ") m, outside the tank and its walls (x in [" +
                                              shortest(0.0 - x_wall) + ", " + shortest(W + x_wall) + "], y in [" + shortest(0.0 - y_wall) + ", " +
-                                             shortest(H + y_wall) + "] m" + (periodic == "none" ? "" : "; a periodic axis's period alone") +
+                                             shortest(H + y_wall) + "] m" + (periodic.x || periodic.y ? "; a periodic axis's period alone" : "") +
                                              "); fluid.tank and the structure's geometry disagree");
                 break;
             }

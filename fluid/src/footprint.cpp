@@ -22,8 +22,8 @@ Footprint estimate_footprint(const sphfsi::Value& fluid) {
     const sphfsi::Value& tank = fluid.at("tank");
     const double dp = num(fluid, "dp"), W = num(tank, "width"), H = num(tank, "height");
     const double layers = static_cast<double>(tank.at("wall_layers").as_int());
-    const std::string periodic = fluid.at("periodic").as_string();
-    const bool walls_x = periodic != "x" && periodic != "xy", floor = periodic != "y" && periodic != "xy";
+    const PeriodicAxes periodic = periodic_axes(fluid);
+    const bool walls_x = !periodic.x, floor = !periodic.y;
     const bool lid = floor && tank.at("closed_top").as_bool();
 
     Footprint f;

@@ -93,8 +93,7 @@ void check_gate(const Value& fluid, const std::string& path, Errors& errors) {
         errors.add(gate, "key '" + key(path, "gate.height") + "': higher than the tank (" + std::to_string(H) + " m)");
     if (t < dp * (1 - 1e-9))
         errors.add(gate, "key '" + key(path, "gate.thickness") + "': thinner than one particle spacing dp = " + std::to_string(dp) + " m");
-    const std::string periodic = fluid.at("periodic").as_string();
-    if (tank.at("closed_top").as_bool() || periodic == "y" || periodic == "xy")
+    if (tank.at("closed_top").as_bool() || periodic_axes(fluid).y)
         errors.add(gate, "key '" + key(path, "gate") + "': the gate stands on the floor and rises out through an open top; "
                                                         "it needs tank.closed_top = false and no periodic y axis");
     for (const char* list : {"water", "obstacle"}) {
@@ -151,12 +150,12 @@ void check_combinations(const Value& fluid, const std::string& path, Errors& err
         errors.add(&tank, "key '" + key(path, "tank.lid_velocity") + "': a moving lid needs tank.closed_top = true");
     if (lid[1] != 0.0)
         errors.add(&tank, "key '" + key(path, "tank.lid_velocity") + "': the lid slides in its own plane; its y component must be 0");
-    const std::string periodic = fluid.at("periodic").as_string();
+    const PeriodicAxes periodic = periodic_axes(fluid);
     const double support = num(fluid, "dp") * num(fluid, "h_over_dp") * kernel_support_factor(fluid.at("kernel").as_string());
     // The grid's own rule (grid_limits.hpp): a length of exactly 3 supports holds only 2 of its cells, which
     // are a hair wider than the support, and was once accepted here and refused at INIT as an internal error.
-    for (const auto& [axis, length] : {std::pair<const char*, const char*>{"x", "width"}, {"y", "height"}})
-        if ((periodic == axis || periodic == "xy") && periodic_cells(num(tank, length), support) < 3)
+    for (const auto& [wraps, length] : {std::pair<bool, const char*>{periodic.x, "width"}, {periodic.y, "height"}})
+        if (wraps && periodic_cells(num(tank, length), support) < 3)
             errors.add(&tank, "key '" + key(path, std::string("tank.") + length) + "': " + fmt(num(tank, length)) +
                                   " m; a periodic axis must be longer than 3 kernel support radii (3 x " + fmt(support) +
                                   " m = " + fmt(3.0 * support) + " m)");
@@ -164,17 +163,18 @@ void check_combinations(const Value& fluid, const std::string& path, Errors& err
     // cut there (the Gaussian's 3 h at h = 1.5 dp reaches 4.5 dp, past the default 3 layers).
     const auto layers = tank.at("wall_layers").as_int();
     const auto needed = static_cast<long long>(std::ceil(support / num(fluid, "dp") - 1e-9));
-    if (periodic != "xy" && needed > kMaxWallLayers)
+    const bool walled = !(periodic.x && periodic.y);
+    if (walled && needed > kMaxWallLayers)
         errors.add(&fluid.at("h_over_dp"), "key '" + key(path, "h_over_dp") + "': the support radius (" + std::to_string(support) +
                                                " m) needs " + std::to_string(needed) + " wall layers, more than the " +
                                                std::to_string(kMaxWallLayers) + " allowed; allowed with kernel \"" +
                                                fluid.at("kernel").as_string() + "\": h_over_dp <= " +
                                                std::to_string(kMaxWallLayers / kernel_support_factor(fluid.at("kernel").as_string())));
-    else if (periodic != "xy" && static_cast<double>(layers) * num(fluid, "dp") < support * (1.0 - 1e-9))
+    else if (walled && static_cast<double>(layers) * num(fluid, "dp") < support * (1.0 - 1e-9))
         errors.add(&tank, "key '" + key(path, "tank.wall_layers") + "': " + std::to_string(layers) +
                               " layers of dp are thinner than the kernel's support radius (" + std::to_string(support) +
                               " m); allowed: at least " + std::to_string(needed));
-    if ((periodic == "y" || periodic == "xy") && tank.at("closed_top").as_bool())
+    if (periodic.y && tank.at("closed_top").as_bool())
         errors.add(&tank, "key '" + key(path, "tank.closed_top") + "': a tank periodic in y has no bottom or top wall");
     // WCSPH's equation of state needs c0; so does artificial viscosity (alpha c0) with PCISPH, which would
     // otherwise run with none, silently (a review).
@@ -451,6 +451,12 @@ sphfsi::Value validate_scene(const sphfsi::Value& fluid, const std::string& sour
     Value checked = scene_schema().validate(fluid, "fluid", errors);
     sphfsi::schema::throw_if_any(errors, source);
     return with_defaults(checked);
+}
+
+PeriodicAxes periodic_axes(const Value& fluid) {
+    const Value* p = fluid.find("periodic");
+    const std::string axes = p && p->is_string() ? p->as_string() : "none";
+    return {axes == "x" || axes == "xy", axes == "y" || axes == "xy"};
 }
 
 GateBox gate_box(const Value& fluid) {

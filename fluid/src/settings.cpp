@@ -44,8 +44,8 @@ FluidSettings read_settings(const sphfsi::Value& raw) {
                     {KernelChoice::Mueller, KernelChoice::Poly6, KernelChoice::Spiky, KernelChoice::CubicSpline,
                      KernelChoice::Wendland, KernelChoice::Gaussian});
     s.gravity = pair(f.at("gravity"));
-    const std::string per = f.at("periodic").as_string();
-    s.periodic = {per == "x" || per == "xy", per == "y" || per == "xy"};
+    const PeriodicAxes per = periodic_axes(f);
+    s.periodic = {per.x, per.y};
     s.threads = static_cast<int>(f.at("threads").as_int());
     s.step_log = f.at("step_log").as_string();
 

@@ -20,6 +20,14 @@ struct GateBox {
 };
 GateBox gate_box(const sphfsi::Value& fluid);
 
+// Which axes of the tank wrap (fluid.periodic: "none", "x", "y" or "xy"), read in this one place by the
+// schema's checks, the settings, the memory estimate and the coordinator's cross-checks. A section without
+// the key (a foreign fluid's, unvalidated) has none.
+struct PeriodicAxes {
+    bool x = false, y = false;
+};
+PeriodicAxes periodic_axes(const sphfsi::Value& fluid);
+
 // Validates a raw [fluid] section and returns it complete; throws ConfigError listing every problem.
 sphfsi::Value validate_scene(const sphfsi::Value& fluid, const std::string& source = "scene");
 
