@@ -147,7 +147,7 @@ class Sweeper:
         for k, v in saved.items():
             setattr(rr, k, v)
         d = self.run_dir(run)
-        rr.stderr_path = os.path.join(d, "sweep_stderr.txt")
+        rr.stderr_path = os.path.join(d, runner.STDERR_FILE)
         with self.metric_lock:
             return record.summarize(d, rr, data.get("timeout_s", self.timeout_of(run)))
 

@@ -19,6 +19,7 @@ import time
 
 CLK_TCK = os.sysconf("SC_CLK_TCK")
 POLL_S = 0.2  # longest sleep between looks at the stop request; the exit itself wakes us at once (pidfd)
+STDERR_FILE = "sweep_stderr.txt"  # in each run's folder: the coordinator's stdout and stderr
 
 
 class RunResult:
@@ -38,7 +39,7 @@ def run_coordinator(sphfsi, scene, out_dir, set_args, timeout_s, grace_s, env=No
     stop early (SIGINT, then SIGKILL after grace_s)."""
     os.makedirs(out_dir, exist_ok=True)
     res = RunResult()
-    res.stderr_path = os.path.join(out_dir, "sweep_stderr.txt")
+    res.stderr_path = os.path.join(out_dir, STDERR_FILE)
     argv = [sphfsi, "run", scene, "--out", out_dir, "--quiet"]
     for a in set_args:
         argv += ["--set", a]
