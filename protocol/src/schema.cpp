@@ -38,6 +38,10 @@ std::string describe(const Value& v) {
 }  // namespace
 
 void Errors::add(const Value* at, std::string message) {
+    // A check may quote the scene's own text (a name, a path, a refused string). Escaping every message here,
+    // not at each quote, keeps an ESC or a line break from a scene out of the terminal, the log and the ERROR
+    // reply, whatever a future check quotes. Escaping is idempotent, so text printable() already escaped stays.
+    message = protocol::printable(message, message.size());
     if (at && at->line > 0) message = "line " + std::to_string(at->line) + ": " + message;
     if (at && at->line == Value::kFromOverride) message = "--set: " + message;
     items.push_back(std::move(message));

@@ -136,6 +136,9 @@ MISTAKES_FOUND_LATE = [
     ("beam_only", ["structure.initial.static_equilibrium=true", "load.force=[0.0,-100.0]"],
      "key 'structure.initial.static_equilibrium': the static solve sees the structure's own loads only"),
     ("beam_only", ['watchpoint[0].name="a,b"'], "key 'watchpoint[0].name': got \"a,b\""),
+    # Every check's message is escaped where it is collected (schema::Errors::add), not only those that quote
+    # with printable(): this one quoted the refused name raw.
+    ("beam_only", ['watchpoint[0].name="tip\\u001b[2J"'], "key 'watchpoint[0].name': got \"tip\\x1b[2J\""),
     ("beam_only", ["structure.members[0].wetted=false", "load.force=[0.0,-100.0]"],
      "[load] is spread over the wetted interface, and no structure.members[] is wetted"),
     ("beam_only", ["structure.members=[{start=[0.0,0.0],end=[1.0,0.0],n_elements=20},"
