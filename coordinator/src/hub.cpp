@@ -48,6 +48,10 @@ void Hub::send_raw(const std::string& identity, const Message& m, bool droppable
         const auto last = droppable ? zmq::send_flags::dontwait : zmq::send_flags::none;
         taken = socket_.send(zmq::buffer(identity), more) && socket_.send(zmq::buffer(bytes), last);
     } catch (const zmq::error_t& e) {
+        // A send blocks only on a full queue (router_mandatory); a Ctrl-C then wakes it with EINTR. That is the
+        // user's stop, not the participant's death. The blocking frame is the identity, the first, so no
+        // half-sent message is left behind on the socket.
+        if (e.num() == EINTR && g_interrupted) throw Interrupted();
         if (role != identity_role_.end()) throw ParticipantFailure(role->second, "died", "cannot be reached: " + std::string(e.what()));
         // a stranger that went away: nothing to do
     }
