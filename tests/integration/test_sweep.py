@@ -508,29 +508,30 @@ fail_if = { "tip.max_rel" = 0.05 }
     assert any(p["passed"] == "false" and p["status"] == "completed" and "tip.max_rel" in p["reason"] for p in probes), probes
 
 
+def one_beam_run(end_time, sweep_keys=""):
+    """A sweep file of one case: the beam to `end_time`, with `sweep_keys` added to its [sweep] table."""
+    return f'''
+[sweep]
+scene = "{BEAM}"
+threads_per_run = 1
+{sweep_keys}
+[fixed]
+"run.end_time" = {end_time}
+[[case]]
+name = "beam"
+'''
+
+
 def test_resume_reruns_a_timeout_under_a_longer_limit():
     """--resume keeps finished runs, but a run that timed out under a shorter limit than today's is run again
     (it was kept as a timeout for ever, and --check then failed on a limit already raised)."""
     d = harness.out_dir("sweep-resume-timeout")
-    body = f'''
-[sweep]
-scene = "{BEAM}"
-timeout_s = TIMEOUT
-grace_s = 5
-threads_per_run = 1
-
-[fixed]
-"run.end_time" = 0.05
-
-[[case]]
-name = "beam"
-'''
     path = os.path.join(d, "s.toml")
     out = os.path.join(d, "out")
-    write(path, body.replace("TIMEOUT", "0.01"))
+    write(path, one_beam_run(0.05, "timeout_s = 0.01\ngrace_s = 5"))
     sweep(path, "--out", out, "--no-charts")
     assert [r["status"] for r in rows_of(out)] == ["timeout"], rows_of(out)
-    write(path, body.replace("TIMEOUT", "60"))
+    write(path, one_beam_run(0.05, "timeout_s = 60\ngrace_s = 5"))
     rc, text = sweep(path, "--out", out, "--no-charts", "--resume")
     assert rc == 0 and [r["status"] for r in rows_of(out)] == ["completed"], (text, rows_of(out))
     assert "(kept)" not in text, text
@@ -541,15 +542,7 @@ def test_resume_reads_a_kept_runs_record_again():
     wrote (a resumed sweep had kept an over-counted particle_steps): a result.json whose counts disagree with
     its record is corrected; the exit status and times it holds are kept."""
     d = harness.out_dir("sweep-resume-reread")
-    path = write(os.path.join(d, "s.toml"), f'''
-[sweep]
-scene = "{BEAM}"
-threads_per_run = 1
-[fixed]
-"run.end_time" = 0.01
-[[case]]
-name = "beam"
-''')
+    path = write(os.path.join(d, "s.toml"), one_beam_run(0.01))
     out = os.path.join(d, "out")
     rc, text = sweep(path, "--out", out, "--no-charts")
     first = rows_of(out)[0]
