@@ -14,9 +14,13 @@ namespace sphfsi::fluid {
 
 using protocol::SolverError;
 
+// Every failure names the particle the same way, by its id and (while it has one) its position, so that a
+// density, a speed or a wall crossing can each be found in the last frame.
 void Simulation2D::fail(std::size_t i, const std::string& quantity, double value, const std::string& why) const {
+    const V& x = st_.P.x[i];
+    const std::string where = all_finite(x) ? " at (" + fmt(x[0]) + ", " + fmt(x[1]) + ") m" : std::string();
     throw SolverError("diverged", "step " + std::to_string(st_.step + (stepping_ ? 1 : 0)) + ", t = " + fmt(st_.t) + " s: particle " +
-                                      std::to_string(st_.P.id[i]) + ": " + quantity + " = " + fmt(value) + " (" + why + ")");
+                                      std::to_string(st_.P.id[i]) + where + ": " + quantity + " = " + fmt(value) + " (" + why + ")");
 }
 
 // Over the top of a side wall of an open tank and out beyond its outer face: the particle has left the tank
@@ -167,28 +171,27 @@ double Simulation2D::check_state(double dt) {
     if (!all_finite(P.v[i])) fail(i, "velocity", norm(P.v[i]), "not finite");
     if (!density_in_bounds(P.rho[i])) fail_density(i);
     if (v_cap > 0.0 && dot(P.v[i], P.v[i]) > v_cap * v_cap)
-        fail(i, "speed", norm(P.v[i]), "above max_mach * c0 = " + fmt(v_cap) + " m/s, at (" + fmt(x[0]) + ", " + fmt(x[1]) + ") m");
-    if (g.walls_x && x[0] < -g.thickness) fail(i, "x", x[0], "beyond the outer face of the left wall at x = " + fmt(-g.thickness) + " m, at y = " + fmt(x[1]) + " m: lost through the wall");
-    if (g.walls_x && x[0] > g.width + g.thickness) fail(i, "x", x[0], "beyond the outer face of the right wall at x = " + fmt(g.width + g.thickness) + " m, at y = " + fmt(x[1]) + " m: lost through the wall");
+        fail(i, "speed", norm(P.v[i]), "above max_mach * c0 = " + fmt(v_cap) + " m/s");
+    if (g.walls_x && x[0] < -g.thickness) fail(i, "x", x[0], "beyond the outer face of the left wall at x = " + fmt(-g.thickness) + " m: lost through the wall");
+    if (g.walls_x && x[0] > g.width + g.thickness) fail(i, "x", x[0], "beyond the outer face of the right wall at x = " + fmt(g.width + g.thickness) + " m: lost through the wall");
     if (g.floor && x[1] < -g.thickness) fail(i, "y", x[1], "below the outer face of the floor at y = " + fmt(-g.thickness) + " m: lost through the wall");
     if (g.lid && x[1] > g.height + g.thickness) fail(i, "y", x[1], "above the outer face of the lid at y = " + fmt(g.height + g.thickness) + " m: lost through the wall");
-    const std::string at = "at (" + fmt(x[0]) + ", " + fmt(x[1]) + ") m";
     if (section_.on() && section_.lost(x))
-        fail(i, "x", x[0], at + ", inside " + section_.name() + ", deeper than the wall layers (" + fmt(g.thickness) +
+        fail(i, "x", x[0], "inside " + section_.name() + ", deeper than the wall layers (" + fmt(g.thickness) +
                                " m) below every face the water can touch, or across a thin part within dp/2 of its middle: "
                                "lost through it");
     if (section_.on() && section_.crossed_middle(x - dt * P.v[i], x))
-        fail(i, "x", x[0], at + ": its step crossed the middle of " + section_.name() + " where it is one cell thick: lost through it");
+        fail(i, "x", x[0], "its step crossed the middle of " + section_.name() + " where it is one cell thick: lost through it");
     for (const Box& b : g.obstacles) {
         const std::string box = "the obstacle x in [" + fmt(b.x0) + ", " + fmt(b.x0 + b.width) + "], y in [" + fmt(b.y0) +
                                 ", " + fmt(b.y0 + b.height) + "] m";
         if (through_obstacle(b, x))
-            fail(i, "x", x[0], at + ", inside " + box + ", deeper than its wall layers (at most " + fmt(g.thickness) +
+            fail(i, "x", x[0], "inside " + box + ", deeper than its wall layers (at most " + fmt(g.thickness) +
                                    " m) below every face the water can touch: lost through it");
         if (across_obstacle_middle(b, x - dt * P.v[i], x))
-            fail(i, "x", x[0], at + ": its step crossed the middle of " + box + ": lost through it");
+            fail(i, "x", x[0], "its step crossed the middle of " + box + ": lost through it");
     }
-    fail(i, "x", x[0], at + ": lost through a wall");  // not reached: broken(i) held for one of the above
+    fail(i, "x", x[0], "lost through a wall");  // not reached: broken(i) held for one of the above
 }
 
 Simulation2D::Crossing Simulation2D::wall_crossings() const {

@@ -162,6 +162,7 @@ TEST_SUITE("failure") {
         }
         MESSAGE(msg);
         CHECK(msg.find("step 0, t = 0 s: particle ") == 0);
+        CHECK(msg.find(") m: density = ") != std::string::npos);  // every failure gives the particle's position
         CHECK(msg.find("below min_density_ratio") != std::string::npos);
     }
 
@@ -173,7 +174,7 @@ TEST_SUITE("failure") {
         MESSAGE(msg);
         CHECK(msg.find("step ") == 0);
         CHECK(msg.find("particle ") != std::string::npos);
-        CHECK(msg.find("speed = ") != std::string::npos);
+        CHECK(msg.find(") m: speed = ") != std::string::npos);
         CHECK(msg.find("max_mach * c0 = 1.98") != std::string::npos);
     }
 
