@@ -132,7 +132,7 @@ void Simulation2D::check_summed_densities() const {
     fail_density(worst);
 }
 
-double Simulation2D::check_state(double dt) {
+Simulation2D::StepCheck Simulation2D::check_state(double dt) {
     mark_escaped();
     if (section_.on()) section_.place(st_.t, dt);
     const auto& P = st_.P;
@@ -140,6 +140,8 @@ double Simulation2D::check_state(double dt) {
     const double v_cap = s_.max_mach * c0_;  // 0: no reference speed (PCISPH without gravity or u_max)
     bool bad = false;
     double rho_max = 0.0;
+    std::size_t crossings = 0;
+    const double surface_tol = crossing_tolerance * s_.dp;
     const long long n = static_cast<long long>(P.size());
     auto broken = [&](std::size_t i) {
         const V& x = P.x[i];
@@ -153,14 +155,15 @@ double Simulation2D::check_state(double dt) {
             if (through_obstacle(b, x) || across_obstacle_middle(b, x - dt * P.v[i], x)) return true;
         return section_.on() && (section_.lost(x) || section_.crossed_middle(x - dt * P.v[i], x));
     };
-#pragma omp parallel for schedule(static) reduction(|| : bad) reduction(max : rho_max)
+#pragma omp parallel for schedule(static) reduction(|| : bad) reduction(max : rho_max) reduction(+ : crossings)
     for (long long q = 0; q < n; ++q) {
         const std::size_t i = static_cast<std::size_t>(q);
         if (P.kind[i] != Kind::Fluid) continue;
         bad = bad || broken(i);
         rho_max = std::max(rho_max, P.rho[i]);
+        crossings += beyond_wall_surface(P.x[i], surface_tol) != Beyond::Nothing;
     }
-    if (!bad) return rho_max;
+    if (!bad) return {rho_max, crossings};
     // Name the first offender (lowest id), with the quantity and why.
     std::size_t worst = P.size();
     for (std::size_t i = 0; i < P.size(); ++i)
@@ -194,30 +197,34 @@ double Simulation2D::check_state(double dt) {
     fail(i, "x", x[0], "lost through a wall");  // not reached: broken(i) held for one of the above
 }
 
+Simulation2D::Beyond Simulation2D::beyond_wall_surface(const V& x, double tol) const {
+    const auto& g = geometry_;
+    const bool beside_walls = g.lid || x[1] <= g.height;
+    if (g.walls_x && beside_walls && x[0] < -tol) return Beyond::LeftWall;
+    if (g.walls_x && beside_walls && x[0] > g.width + tol) return Beyond::RightWall;
+    if (g.floor && x[1] < -tol) return Beyond::Floor;
+    if (g.lid && x[1] > g.height + tol) return Beyond::Lid;
+    for (const Box& b : g.obstacles)
+        if (x[0] > b.x0 + tol && x[0] < b.x0 + b.width - tol && x[1] > b.y0 + tol && x[1] < b.y0 + b.height - tol)
+            return Beyond::Obstacle;
+    if (section_.on() && section_.past_surface(x, tol)) return Beyond::Section;
+    return Beyond::Nothing;
+}
+
 Simulation2D::Crossing Simulation2D::wall_crossings() const {
-    // A centre within 0.1 dp of a wall surface is on it, not through it: SPH puts the surface half a spacing
-    // from the first wall layer, and a particle sliding round a convex corner grazes it.
     Crossing c;
     const auto& P = st_.P;
-    const auto& g = geometry_;
-    const double tol = 0.1 * s_.dp;
     for (std::size_t i = 0; i < P.size(); ++i) {
         if (P.kind[i] != Kind::Fluid) continue;
-        const V& x = P.x[i];
-        const bool beside_walls = g.lid || x[1] <= g.height;
-        std::string why;
-        if (g.walls_x && beside_walls && x[0] < -tol) why = "left of the left wall surface";
-        else if (g.walls_x && beside_walls && x[0] > g.width + tol) why = "right of the right wall surface";
-        else if (g.floor && x[1] < -tol) why = "below the floor surface";
-        else if (g.lid && x[1] > g.height + tol) why = "above the lid surface";
-        for (const Box& b : g.obstacles)
-            if (why.empty() && x[0] > b.x0 + tol && x[0] < b.x0 + b.width - tol && x[1] > b.y0 + tol &&
-                x[1] < b.y0 + b.height - tol)
-                why = "inside an obstacle";
-        if (why.empty() && section_.on() && section_.past_surface(x, tol)) why = "inside " + section_.name();
-        if (why.empty()) continue;
-        if (c.count++ == 0)
-            c.first = "particle " + std::to_string(P.id[i]) + " at (" + fmt(x[0]) + ", " + fmt(x[1]) + ") m: " + why;
+        const Beyond where = beyond_wall_surface(P.x[i], crossing_tolerance * s_.dp);
+        if (where == Beyond::Nothing || c.count++ > 0) continue;
+        const std::string why = where == Beyond::LeftWall    ? "left of the left wall surface"
+                                : where == Beyond::RightWall ? "right of the right wall surface"
+                                : where == Beyond::Floor     ? "below the floor surface"
+                                : where == Beyond::Lid       ? "above the lid surface"
+                                : where == Beyond::Obstacle  ? "inside an obstacle"
+                                                             : "inside " + section_.name();
+        c.first = "particle " + std::to_string(P.id[i]) + " at (" + fmt(P.x[i][0]) + ", " + fmt(P.x[i][1]) + ") m: " + why;
     }
     return c;
 }

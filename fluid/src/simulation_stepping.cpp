@@ -266,9 +266,10 @@ double Simulation2D::take_step(double dt, double t_after, bool adaptive, WindowS
     stepping_ = false;
     // Velocity Verlet re-initialises inside its step, before its one evaluation (step_verlet).
     if (s_.integrator != Integrator::VelocityVerlet && reinitialisation_due(st_.step)) reinitialise_densities();
-    const double rho_max = check_state(dt);
+    const StepCheck checked = check_state(dt);
+    ws.max_wall_crossings = std::max(ws.max_wall_crossings, checked.wall_crossings);
     if (s_.pressure != PressureModel::Pcisph)
-        ws.max_density_error = std::max(ws.max_density_error, (std::max(rho_max, st_.rho_max) - s_.rho0) / s_.rho0);
+        ws.max_density_error = std::max(ws.max_density_error, (std::max(checked.rho_max, st_.rho_max) - s_.rho0) / s_.rho0);
     return dt;
 }
 

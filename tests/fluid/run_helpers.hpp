@@ -36,6 +36,13 @@ inline std::unique_ptr<sphfsi::fluid::SphSolver> start_around(const sphfsi::Valu
     return solver;
 }
 
+// The most fluid particles beyond a wall surface after any one step of a window (its "wall_crossings"
+// statistic): the validation scenes' "no particle crosses a wall" is checked at every step, not only at the
+// windows' ends.
+inline std::size_t wall_crossings(const sphfsi::protocol::AdvanceReply& reply) {
+    return static_cast<std::size_t>(reply.stats.at("wall_crossings").as_int());
+}
+
 // Advances in windows of `window` seconds (adaptive sub-steps) up to t_end, calling `each` after every
 // window with the reply.
 inline void run(sphfsi::fluid::SphSolver& solver, double t_end, double window,

@@ -73,7 +73,7 @@ void check_against(sphfsi::fluid::SphSolver& s, const char* name, const std::vec
                    const std::function<double(double, double)>& exact, double tolerance) {
     std::size_t crossings = 0;
     for (double t : times) {
-        run(s, t, 0.01, [&](const auto&) { crossings += s.simulation().wall_crossings().count; });
+        run(s, t, 0.01, [&](const auto& reply) { crossings += wall_crossings(reply); });
         const double e = l2_error(s, [&](double y) { return exact(y, t); });
         std::printf("%s: t = %.4f s, relative L2 error %.3f %% (tolerance %.0f %%)\n", name, t, 100 * e, 100 * tolerance);
         CAPTURE(t);
@@ -131,10 +131,9 @@ TEST_SUITE("wind") {
         auto s = start(wind_section(D, dp, W, tau, nu));
         LayerProfile profile(D, dp);
         std::size_t crossings = 0;
-        run(*s, 2.0, 0.05, [&](const auto&) { crossings += s->simulation().wall_crossings().count; });
+        run(*s, 2.0, 0.05, [&](const auto& reply) { crossings += wall_crossings(reply); });
         while (s->simulation().time() < 4.0 - 1e-9) {
-            run(*s, s->simulation().time() + 0.05, 0.05);
-            crossings += s->simulation().wall_crossings().count;
+            run(*s, s->simulation().time() + 0.05, 0.05, [&](const auto& reply) { crossings += wall_crossings(reply); });
             profile.add(s->simulation().particles());
         }
         const double e = profile.l2_error(tau, wind_rho0 * nu, "wind");

@@ -146,7 +146,7 @@ DamBreakResult run_dam_break(const Value& config, const char* name) {
             res.steps += r.substeps;
             res.iterations += r.solver_iterations;
             res.max_density_error = std::max(res.max_density_error, r.stats.at("max_density_error").as_double());
-            res.crossings += solver->simulation().wall_crossings().count;
+            res.crossings += wall_crossings(r);
             // The densities the particles have where they ended, not the prediction the solver iterated on:
             // evaluating the rates now (which the next step would do first anyway) sums them there.
             auto& sim = solver->simulation();
