@@ -116,21 +116,28 @@ void load_section(schema::TableSchema& s) {
         .unit("Hz").greater_than(0).fallback(1.0);
 }
 
+// A name is a column label for charts and tools, not a description: 64 characters is room enough, and it keeps
+// every watchpoints.csv row short.
+constexpr std::size_t kMaxWatchpointName = 64;
+
 void watchpoint_section(schema::TableSchema& s) {
     auto& w = s.table_array("watchpoint", "A named point on the structure whose displacement goes to watchpoints.csv.");
-    w.string("name", "Name in watchpoints.csv, e.g. tip: letters, digits, '_', '.' and '-'.").required();
+    w.string("name", "Name in watchpoints.csv, e.g. tip: letters, digits, '_', '.' and '-', at most " +
+                         std::to_string(kMaxWatchpointName) + " of them.").required();
     w.number("x", "Reference position x.").unit("m").required();
     w.number("y", "Reference position y.").unit("m").required();
     // watchpoints.csv is written unquoted, and a resume keeps its rows by their comma count: a comma or a
     // line break in a name would cut the earlier rows off.
     w.check([](const Value& t, const std::string& path, schema::Errors& e) {
         const std::string& name = t.at("name").as_string();
-        const bool plain = !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
-            return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '-';
-        });
+        const bool plain = !name.empty() && name.size() <= kMaxWatchpointName &&
+                           std::all_of(name.begin(), name.end(), [](char c) {
+                               return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '-';
+                           });
         if (!plain)
-            e.add(&t.at("name"), "key '" + path + ".name': got \"" + name +
-                                     "\"; allowed: a non-empty name of letters, digits, '_', '.' and '-'");
+            e.add(&t.at("name"), "key '" + path + ".name': got \"" + protocol::printable(name) +
+                                     "\"; allowed: a non-empty name of at most " + std::to_string(kMaxWatchpointName) +
+                                     " letters, digits, '_', '.' and '-'");
     });
 }
 

@@ -82,9 +82,12 @@ void Watchpoints::abandon_resume() {
 void Watchpoints::write(double t, const protocol::F64Array& displacement) {
     for (const Point& p : points_) {
         auto d = protocol::interpolate(p.where, displacement);
-        char line[256];
-        std::snprintf(line, sizeof line, "%.12g,%s,%.12g,%.12g,%.12g,%.12g\n", t, p.name.c_str(), p.x + d[0], p.y + d[1], d[0], d[1]);
-        out_ << line;
+        // The name goes in as it is, not through a fixed buffer: one cut short there lost its line's end, and
+        // the row ran into the next (a 240-character name, a review, 2026-11-27).
+        char time[32], numbers[128];
+        std::snprintf(time, sizeof time, "%.12g,", t);
+        std::snprintf(numbers, sizeof numbers, ",%.12g,%.12g,%.12g,%.12g\n", p.x + d[0], p.y + d[1], d[0], d[1]);
+        out_ << time << p.name << numbers;
     }
 }
 

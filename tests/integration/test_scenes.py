@@ -136,6 +136,8 @@ MISTAKES_FOUND_LATE = [
     ("beam_only", ["structure.initial.static_equilibrium=true", "load.force=[0.0,-100.0]"],
      "key 'structure.initial.static_equilibrium': the static solve sees the structure's own loads only"),
     ("beam_only", ['watchpoint[0].name="a,b"'], "key 'watchpoint[0].name': got \"a,b\""),
+    # A 240-character name overflowed the row buffer and ran its row into the next (a review, 2026-11-27).
+    ("beam_only", ['watchpoint[0].name="' + "t" * 65 + '"'], "allowed: a non-empty name of at most 64 letters"),
     # Every check's message is escaped where it is collected (schema::Errors::add), not only those that quote
     # with printable(): this one quoted the refused name raw.
     ("beam_only", ['watchpoint[0].name="tip\\u001b[2J"'], "key 'watchpoint[0].name': got \"tip\\x1b[2J\""),
