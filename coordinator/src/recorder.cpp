@@ -320,7 +320,11 @@ std::size_t Recorder::frames(const std::string& role) const {
     return it == series_.end() ? 0 : it->second.rows();
 }
 
+// The rows still buffered reach the file first, then the status: a kill between the two flushes leaves a
+// status that describes no more than the rows on disk ("completed" once came out one flush before the last
+// windows, a review, 2026-11-27).
 void Recorder::set_status(const std::string& status) {
+    flush();
     h5::set_attribute(h5_.get(), "status", status);
     h5::flush(h5_.get());
 }

@@ -238,15 +238,14 @@ int Runner::execute() {
         recorder_->set_number("interface_work", iface_.work_total);
         recorder_->set_number("interface_energy_created", iface_.created_total);
     }
-    recorder_->set_status(status);
-    recorder_->flush();
+    recorder_->set_status(status);  // after every row and total above is on disk
     if (watchpoints_) watchpoints_->flush();
     if (code == 0) {  // a completed resume replaces the interrupted files whatever time they reached
         take_over_when_caught_up(std::numeric_limits<double>::infinity());
     } else {
         // A resume that reached the interrupted record's end holds all of it and then this stop: its copy
-        // replaces the files, as it would have at the end of the window it stopped in (the loop takes over last,
-        // after the window's frames and checkpoint, any of which can fail).
+        // replaces the files, as it would have at the end of the window it stopped in (the loop takes over
+        // after the window's frames, which can fail).
         take_over_when_caught_up(t_);
         if (recorder_->resume_pending()) {
             log("the resumed run stopped at t = " + std::to_string(t_) + " s, before t = " +
@@ -484,8 +483,12 @@ void Runner::loop() {
         progress_->update(t_, steps_);
         // Frames at k * output_interval, and the end's state whether or not end_time is one of those.
         if (t_ >= output_index_ * output_dt_ - eps || t_ >= end_ - eps) snapshot_all();
-        if (stop.checkpoint && t_ == t_stop) checkpoint();
+        // A resume's copy takes over before a checkpoint of this time is published. The other way round, a
+        // kill between the two left a checkpoint at t beside the interrupted record, whose last flush may have
+        // been cut inside this window's rows: the next resume kept its rows before t, started after t, and
+        // the window was gone from the record for good (a review of the recorder, 2026-11-27).
         take_over_when_caught_up(t_);
+        if (stop.checkpoint && t_ == t_stop) checkpoint();
     }
 }
 

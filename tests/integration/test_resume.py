@@ -216,6 +216,39 @@ def test_a_resume_that_stops_before_catching_up_leaves_the_record_as_it_was():
         assert f.attrs["status"] == "completed" and f["frames/structure/time"].shape[0] == 21
 
 
+def killed_at_a_rename(args, to, count, when, timeout=60):
+    """Runs sphfsi with kill_at_write.so, which SIGKILLs it just `when` ("before" or "after") its `count`-th
+    rename onto a path ending in `to`."""
+    env = dict(os.environ, LD_PRELOAD=os.path.join(harness.BIN, "kill_at_write.so"), SPHFSI_KILL_AT_RENAME_TO=to,
+               SPHFSI_KILL_AT_RENAME_COUNT=str(count), SPHFSI_KILL_AT_RENAME_WHEN=when)
+    p = subprocess.run([os.path.join(harness.BIN, "sphfsi"), *args], capture_output=True, text=True, env=env,
+                       timeout=timeout)
+    assert p.returncode == -signal.SIGKILL, (p.returncode, p.stderr)
+
+
+def test_a_checkpoint_is_published_only_after_the_resumed_copy_took_over():
+    """The interrupted run is killed just before it publishes its checkpoint at 0.15 s, so its record ends at
+    0.15 s and its checkpoint says 0.1 s. The resume catches up at 0.15 s; it is killed just after it
+    publishes its own checkpoint of 0.15 s. That checkpoint must stand beside a record that holds 0.15 s: the
+    copy has replaced record.h5 before it. The checkpoint used to come first, leaving it beside the interrupted
+    record, whose last flush a kill may have cut inside the 0.15 s window's rows; the next resume then kept
+    the rows before 0.15 s, started after it, and the window was missing from the completed record (a review
+    of the recorder found it with a kill inside that flush, 2026-11-27)."""
+    out = harness.out_dir("resume-checkpoint-order")
+    killed_at_a_rename(["run", SCENE, "--out", out, "--quiet", "--set", "run.end_time=0.2", "--set",
+                        "run.checkpoint_interval=0.05", "--set", "run.output_interval=0.01"], "checkpoint.bin", 3, "before")
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert abs(f["windows/t"][-1] - 0.15) < 1e-12, f["windows/t"][:]
+    killed_at_a_rename(["run", "--resume", out, "--quiet"], "checkpoint.bin", 1, "after")
+    assert not [n for n in os.listdir(out) if n.endswith(".resuming")], os.listdir(out)
+    code, text = harness.sphfsi("run", "--resume", out, "--quiet", timeout=60)
+    assert code == 0, text
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert f.attrs["status"] == "completed"
+        t = f["windows/t"][:]
+        assert len(t) == 20 and max(abs(t - 0.01 * np.arange(1, 21))) < 1e-9, t
+
+
 def test_a_resume_that_fails_after_catching_up_replaces_the_record():
     """A resume that has reached where the interrupted record ends holds all of it; when the window that got
     there then fails (here its frame: the participant answers SNAPSHOT at t = 0.5 s with ERROR), the record
