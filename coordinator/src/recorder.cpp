@@ -104,11 +104,19 @@ Recorder::Recorder(std::filesystem::path file, const RunMetadata& meta, std::opt
         throw std::runtime_error(interrupted.string() + " is left from a resume that did not finish and may hold history that " +
                                  file_.string() + " lacks: keep the file you want as " + file_.filename().string() +
                                  ", remove the other, and resume again");
+    if (!std::filesystem::is_regular_file(file_))
+        throw std::runtime_error("cannot resume: " + file_.string() + " is missing; the checkpoint continues that record, " +
+                                 "so without it start a new run");
     resuming_.begin(file_);
-    h5_ = h5::create_file(resuming_.path().string());
-    copy_history(file_, *resume_at);
-    set_status("running (resumed)");
-    flush();
+    try {
+        h5_ = h5::create_file(resuming_.path().string());
+        copy_history(file_, *resume_at);
+        set_status("running (resumed)");
+        flush();
+    } catch (const std::exception& e) {
+        abandon_resume();  // record.h5 stays as the interrupted run left it, and no copy is left beside it
+        throw std::runtime_error("cannot resume from " + file_.string() + ": " + e.what());
+    }
 }
 
 void Recorder::take_over_when_caught_up(double t) {
@@ -129,6 +137,8 @@ void Recorder::abandon_resume() {
 // Copies the interrupted run's record up to time `until`: the scene, participants and root attributes
 // whole; windows, interface history and frames row by row, up to the last one at or before `until`.
 void Recorder::copy_history(const std::filesystem::path& old_file, double until) {
+    if (H5Fis_hdf5(old_file.c_str()) <= 0)  // H5Fis_accessible from HDF5 1.12; Debian 12 has 1.10
+        throw std::runtime_error("it is not an HDF5 file that can be read (damaged, or not a record)");
     h5::Handle src(H5Fopen(old_file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose, "open " + old_file.string());
     for (const char* path : {"/scene", "/participants"})
         if (h5::exists(src.get(), path)) h5::copy_object(src.get(), h5_.get(), path);

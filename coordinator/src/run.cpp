@@ -198,8 +198,13 @@ int Runner::execute() {
 
     RunMetadata meta{scene_.file.string(), scene_.text, "", kSoftwareVersion, kGitRevision, kProtocolVersion};
     for (const auto& o : scene_.overrides) meta.overrides += (meta.overrides.empty() ? "" : " ") + o;
-    recorder_ = std::make_unique<Recorder>(opt_.out_dir / "record.h5", meta,
-                                           resume ? std::optional<double>(resume->t) : std::nullopt);
+    try {
+        recorder_ = std::make_unique<Recorder>(opt_.out_dir / "record.h5", meta,
+                                               resume ? std::optional<double>(resume->t) : std::nullopt);
+    } catch (const std::exception& e) {
+        if (log_file_) log_file_ << "error: " << e.what() << std::endl;  // run_scene puts it on stderr
+        throw;
+    }
     if (resume) {  // the totals cover every window of the record, those before the interruption too
         wall_in_loop_s_ = recorder_->window_column_sum("wall_s");
         messaging_total_s_ = recorder_->window_column_sum("messaging_s");

@@ -249,6 +249,35 @@ def test_a_checkpoint_is_published_only_after_the_resumed_copy_took_over():
         assert len(t) == 20 and max(abs(t - 0.01 * np.arange(1, 21))) < 1e-9, t
 
 
+def test_a_resume_without_a_readable_record_says_why_and_leaves_nothing():
+    """A resume whose record.h5 is missing or damaged stops before anything starts, says why on stderr and in
+    run.log, and leaves no copy beside the record. It once said only "HDF5: cannot open record.h5", in stderr
+    alone, and left record.h5.resuming behind (a review of the recorder, 2026-11-27)."""
+    out = harness.out_dir("resume-no-record")
+    harness.sphfsi("run", SCENE, "--out", out, "--quiet", "--set", "run.end_time=0.2", "--set",
+                   "run.checkpoint_interval=0.05", check=0, timeout=60)
+    import h5py
+    with h5py.File(os.path.join(out, "record.h5"), "r+", locking=False) as f:
+        f.attrs["status"] = "running"  # as a run killed after its last checkpoint leaves it
+    record = os.path.join(out, "record.h5")
+    os.rename(record, record + ".kept")
+    for damage, says in ((None, "record.h5 is missing"), (b"not a record", "it is not an HDF5 file that can be read")):
+        if damage:
+            with open(record, "wb") as f:
+                f.write(damage)
+        code, text = harness.sphfsi("run", "--resume", out, "--quiet", timeout=60)
+        assert code == 1 and says in text, text
+        with open(os.path.join(out, "run.log")) as f:
+            assert says in f.read().splitlines()[-1]
+        assert not [n for n in os.listdir(out) if n.endswith(".resuming")], os.listdir(out)
+        if damage:
+            with open(record, "rb") as f:
+                assert f.read() == damage
+    os.replace(record + ".kept", record)
+    code, text = harness.sphfsi("run", "--resume", out, "--quiet", timeout=60)
+    assert code == 0, text
+
+
 def test_a_resume_that_fails_after_catching_up_replaces_the_record():
     """A resume that has reached where the interrupted record ends holds all of it; when the window that got
     there then fails (here its frame: the participant answers SNAPSHOT at t = 0.5 s with ERROR), the record
