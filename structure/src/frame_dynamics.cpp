@@ -45,6 +45,14 @@ FrameDynamics::FrameDynamics(StructureConfig config, double t0)
         const int highest = modes_.rigid_body + std::min(config_.time.resolved_modes, elastic) - 1;
         dt_accuracy_ = accuracy_step(config_.time, modes_.omega(highest));
     }
+    // A sine load is sampled at the step ends: its period must be resolved as a mode's is, or a load above
+    // half the step rate acts as its alias (5863 Hz moved the beam as 16.7 Hz did, to the digit, a review,
+    // 2026-11-27). The coordinator bounds its [load] windows the same way.
+    auto resolve = [&](const History& h) {
+        if (h.kind == History::Kind::Sine) dt_accuracy_ = std::min(dt_accuracy_, 1.0 / (h.frequency * config_.time.steps_per_period));
+    };
+    for (const auto& p : config_.point_loads) resolve(p.history);
+    for (const auto& d : config_.distributed_loads) resolve(d.history);
     if (config_.initial.mode > elastic)
         throw SolverError("bad_config", "structure.initial.mode = " + std::to_string(config_.initial.mode) +
                                             " but the structure has only " + std::to_string(elastic) +

@@ -340,7 +340,8 @@ TableSchema build() {
     time.number("dt_max", "largest step the structure accepts").unit("s").greater_than(0).fallback(1e-3);
     time.integer("resolved_modes", "the accuracy limit on the step resolves this many lowest elastic modes")
         .at_least(1).at_most(50).fallback(3);
-    time.number("steps_per_period", "accuracy limit: at least this many steps per period of the highest resolved mode")
+    time.number("steps_per_period", "accuracy limit: at least this many steps per period of the highest resolved mode, "
+                                    "and of every sine point or distributed load")
         .at_least(2).at_most(1e6).fallback(20.0);
     time.number("max_numerical_damping",
                 "backward_euler only: largest algorithmic damping ratio ln(1+W^2)/(2 atan W), W = omega dt, "
