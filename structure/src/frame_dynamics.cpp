@@ -22,7 +22,7 @@ std::string num(double x) {
 }
 }  // namespace
 
-FrameDynamics::FrameDynamics(StructureConfig config, double t0)
+FrameDynamics::FrameDynamics(StructureConfig config, double t0, bool fresh)
     : config_(std::move(config)), model_(build_model(config_)), loads_(config_, model_) {
     // One mass matrix for the whole run, in the reference configuration, also for co-rotational runs (the
     // common constant-mass simplification of co-rotational dynamics). Lumped masses are the same in every
@@ -57,7 +57,8 @@ FrameDynamics::FrameDynamics(StructureConfig config, double t0)
         throw SolverError("bad_config", "structure.initial.mode = " + std::to_string(config_.initial.mode) +
                                             " but the structure has only " + std::to_string(elastic) +
                                             " elastic modes");
-    reset(t0);
+    if (fresh) reset(t0);
+    else at_rest(t0);
 }
 
 void FrameDynamics::setup_damping() {
@@ -112,13 +113,17 @@ SparseMatrix FrameDynamics::damping(const Vector& u) const {
     return rayleigh_alpha_ * M_ + rayleigh_beta_ * material;
 }
 
-void FrameDynamics::reset(double t0) {
+void FrameDynamics::at_rest(double t0) {
     const int n = model_.dof_count();
     state_ = State{};
     state_.t = t0;
     state_.u = Vector::Zero(n);
     state_.v = Vector::Zero(n);
     state_.a = Vector::Zero(n);
+}
+
+void FrameDynamics::reset(double t0) {
+    at_rest(t0);
     const auto& init = config_.initial;
     if (init.mode > 0) {
         Vector phi = modes_.shapes.col(modes_.rigid_body + init.mode - 1);

@@ -39,7 +39,7 @@ InitReply StructureSolver::init(const InitRequest& request) {
     } catch (const ConfigError& e) {
         throw SolverError("bad_config", e.what());
     }
-    dynamics_ = std::make_unique<FrameDynamics>(std::move(config), request.t0);
+    dynamics_ = std::make_unique<FrameDynamics>(std::move(config), request.t0, request.state.empty());
     if (!request.state.empty()) {
         dynamics_->state() = decode_state(request.state, dynamics_->model());
         // INIT's t0 is the coordinator's checkpoint time, the state carries its own: one instant, or the first

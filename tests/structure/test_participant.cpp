@@ -253,6 +253,33 @@ TEST_CASE("a resumed run checks energy against the run's own start, not the resu
     CHECK(a.dynamics().state().u == b.dynamics().state().u);
 }
 
+TEST_CASE("a resume does not redo the scene's start at the resume time") {
+    // A free beam in static equilibrium at t = 0, where its tip load has not started yet. At the resume time
+    // the load is on, and a free beam under a load has no static equilibrium: INIT of the resume rebuilt the
+    // start there and refused the checkpoint ("the structure can move without deforming"), although the
+    // run had started fine (a review, 2026-11-27). The resumed run now goes on exactly as the uninterrupted one.
+    Value scene = beam(10, "", "", "corotational");
+    set(scene, "time.dt_max", Value(1e-3));
+    set(scene, "initial.static_equilibrium", Value(true));
+    Value load = point_load(L, 0.0, 0.0, -100.0);
+    load.as_table_mut()["start_time"] = Value(0.002);
+    set(scene, "point_loads", Value(Value::Array{load}));
+    StructureSolver a;
+    a.init(request(scene));
+    Progress p;
+    double t = 0.0;
+    for (int k = 0; k < 4; ++k) t = a.advance(window(t, 1e-3, 1), p).t;
+    StructureSolver b;
+    CHECK(code_of([&] { b.init(request(scene, a.checkpoint(), t)); }) == "none");
+    for (int k = 0; k < 4; ++k) {
+        const double ta = a.advance(window(t, 1e-3, 1), p).t;
+        REQUIRE(b.advance(window(t, 1e-3, 1), p).t == ta);
+        t = ta;
+    }
+    CHECK(a.dynamics().state().u == b.dynamics().state().u);
+    CHECK(a.dynamics().state().u.norm() > 0.0);
+}
+
 TEST_CASE("a sine load's period is resolved by the step the structure asks for") {
     // A tip load at the frequency whose samples at the unloaded beam's step are those of a load at the first
     // natural frequency, f = 1/dt - f1, aliased onto resonance: before 2026-11-27 the structure asked for

@@ -39,8 +39,12 @@ struct StepReport {
 
 class FrameDynamics {
 public:
-    // Builds the model, the matrices and the modes, and sets the initial state of config.initial at t0.
-    explicit FrameDynamics(StructureConfig config, double t0 = 0.0);
+    // Builds the model, the matrices and the modes, and sets the initial state of config.initial at t0. A
+    // resume passes `fresh` = false: the state is at rest at t0 until the checkpoint's replaces it. The scene's
+    // start (a static solve, a mode shape) would be wasted work there, and the static solve ran with the
+    // loads of the resume time, which can leave the structure free to move (a resume that then failed INIT
+    // where the run had started, a review, 2026-11-27).
+    explicit FrameDynamics(StructureConfig config, double t0 = 0.0, bool fresh = true);
 
     const StructureConfig& config() const { return config_; }
     const Model& model() const { return model_; }
@@ -61,6 +65,8 @@ public:
     State& state() { return state_; }
     // Sets the initial state of config.initial at t0 (undeformed, mode shape or static equilibrium).
     void reset(double t0);
+    // Undeformed and at rest at t0.
+    void at_rest(double t0);
 
     // The scene's own loads at time t, on the current configuration.
     Vector scene_load(double t) const;
