@@ -339,6 +339,9 @@ private:
         try {
             if (m.type != MessageType::Init && !initialised_)
                 return reply_error(m.seq, "bad_state", std::string(to_string(m.type)) + " before INIT");
+            if (inside_failed_window_ && m.type != MessageType::Restore)
+                return reply_error(m.seq, "bad_state", std::string(to_string(m.type)) + " after a failed ADVANCE: the state is "
+                                                       "somewhere inside that window, at no window end (RESTORE returns to the saved one)");
             switch (m.type) {
                 case MessageType::Init: {
                     // READY is for good (docs/protocol.md §3): a second INIT would silently rebuild the solver
@@ -361,7 +364,17 @@ private:
                     const AdvanceRequest& req = m.as<AdvanceRequest>();
                     check_inputs(req.inputs);
                     auto start = Clock::now();
-                    AdvanceReply r = solver_->advance(req, progress_);
+                    AdvanceReply r;
+                    try {
+                        r = solver_->advance(req, progress_);
+                    } catch (const CodedError& e) {
+                        // bad_message and bad_state refuse a request that was not carried out (docs/protocol.md §3).
+                        inside_failed_window_ = e.code() != "bad_message" && e.code() != "bad_state";
+                        throw;
+                    } catch (...) {
+                        inside_failed_window_ = true;
+                        throw;
+                    }
                     r.compute_s = std::chrono::duration<double>(Clock::now() - start).count();
                     last_t_ = r.t;
                     return reply(m.seq, MessageType::Advanced, std::move(r));
@@ -373,6 +386,7 @@ private:
                 case MessageType::Restore:
                     solver_->restore();
                     last_t_ = saved_t_;
+                    inside_failed_window_ = false;
                     return reply(m.seq, MessageType::Ack);
                 case MessageType::Snapshot: return reply(m.seq, MessageType::Frame, Frame{last_t_, solver_->snapshot()});
                 case MessageType::Checkpoint: return reply(m.seq, MessageType::State, State{last_t_, solver_->checkpoint()});
@@ -416,6 +430,9 @@ private:
     std::uint32_t version_ = kProtocolVersion;
     double heartbeat_s_ = 0.5, timeout_s_ = 5.0;
     double last_t_ = 0.0, saved_t_ = 0.0;  // time of the current and of the saved state
+    // An ADVANCE failed part-way (diverged, not_converged, internal): the solver's state lies inside that
+    // window, where no FRAME, STATE or SAVE may claim a window end's time.
+    bool inside_failed_window_ = false;
     bool initialised_ = false;
     std::mutex beat_mutex_;
     std::condition_variable beat_cv_;

@@ -273,6 +273,31 @@ def test_init_after_ready_is_bad_state_and_leaves_the_state_alone():
             s.close()
 
 
+def test_after_an_advance_that_failed_part_way_only_restore_is_answered():
+    """A structure driven to blow up inside a window (a force of 1e300 N: 'diverged' at a sub-step) holds a
+    state part-way through it. A FRAME then paired the window start's t with it (a review, 2026-11-27: t = 0
+    with a node 822 m away). SNAPSHOT, CHECKPOINT, SAVE and ADVANCE are now bad_state until RESTORE brings
+    back the saved state, which answers again, at its own time."""
+    s = Session([os.path.join(harness.BIN, "sphfsi-structure")])
+    c = s.c
+    try:
+        n = vertices(s.init(section(SCENE, "structure"), seq=2))
+        assert c.request("SAVE", 3, {})["type"] == "ACK"
+        huge = f8(n, values=[1e300] * (2 * n))
+        failed = c.request("ADVANCE", 4, advance(0.0, 1e-3, n, substeps=10, force=huge))
+        assert failed["type"] == "ERROR" and failed["body"]["code"] == "diverged", brief(failed)
+        for seq, (type_, body) in enumerate((("SNAPSHOT", {}), ("CHECKPOINT", {}), ("SAVE", {}),
+                                             ("ADVANCE", advance(0.0, 1e-3, n))), start=5):
+            expect_error(c.request(type_, seq, body), seq, "bad_state", mentions="after a failed ADVANCE")
+        assert c.request("RESTORE", 9, {})["type"] == "ACK"
+        frame = c.request("SNAPSHOT", 10, {})
+        assert frame["type"] == "FRAME" and frame["body"]["t"] == 0.0, brief(frame)
+        advanced = c.request("ADVANCE", 11, advance(0.0, 1e-3, n))
+        assert advanced["type"] == "ADVANCED", brief(advanced)
+    finally:
+        s.close()
+
+
 def test_structure_advance_takes_exactly_force():
     # A missing `force` used to be taken as zero, an extra field ignored.
     for p in programs():
