@@ -1,5 +1,6 @@
 #include "sphfsi/structure/checkpoint.hpp"
 
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -108,6 +109,19 @@ State decode_state(const std::vector<std::uint8_t>& bytes, const Model& model) {
         throw protocol::SolverError("bad_config", "structure: the checkpoint holds a time, load work, energy baseline or scale, "
                                                   "displacement, velocity or acceleration that is not a finite number "
                                                   "(or a negative energy); the file is damaged");
+    // The supports allow only u = T q (T's columns orthonormal): a clamped node that moved, or a roller off its
+    // surface, is a state no run holds. Accepted, such a file had a clamped node 0.5 m away, and the run
+    // stopped at its second step for creating energy (a review, 2026-11-27).
+    const std::array<std::pair<const Vector*, const char*>, 3> motions{{{&s.u, "displacement"}, {&s.v, "velocity"}, {&s.a, "acceleration"}}};
+    for (const auto& [x, what] : motions) {
+        const Vector off = *x - model.T * (model.T.transpose() * *x);
+        if (off.lpNorm<Eigen::Infinity>() > 1e-9 * x->lpNorm<Eigen::Infinity>()) {
+            Eigen::Index dof = 0;
+            off.cwiseAbs().maxCoeff(&dof);
+            throw protocol::SolverError("bad_config", std::string("structure: the checkpoint gives node ") + std::to_string(dof / 3) +
+                                                          " a " + what + " its supports do not allow; the file is damaged");
+        }
+    }
     return s;
 }
 

@@ -94,11 +94,15 @@ AdvanceReply StructureSolver::advance(const AdvanceRequest& request, Progress& p
     if (n == 0) {
         const auto count = substeps_to_cover(request.dt, dt_wanted_);
         if (!count)
-            throw SolverError("bad_config", "structure: a window of " + seconds(request.dt) + " needs more sub-steps of " +
+            throw SolverError("bad_message", "structure: a window of " + seconds(request.dt) + " needs more sub-steps of " +
                                                 seconds(dt_wanted_) + " than a count can hold (time.dt_max is too small)");
         n = *count;
     }
     const double h = request.dt / n;
+    // The integrators divide by h^2 (Newmark's 1/(beta h^2)): a sub-step whose square underflows is not one
+    // they can take. It was reported as an internal "singular effective matrix" with no step or time.
+    if (!std::isfinite(1.0 / (h * h)))
+        throw SolverError("bad_message", "structure: a sub-step of " + seconds(h) + " is too short to integrate (1/h^2 overflows)");
 
     const F64Array* force = nullptr;
     if (auto it = request.inputs.find("force"); it != request.inputs.end()) {
@@ -106,6 +110,13 @@ AdvanceReply StructureSolver::advance(const AdvanceRequest& request, Progress& p
         if (!force) throw SolverError("bad_message", "structure: inputs[\"force\"] must be an f8 array");
     }
     const double depth = d.config().section.depth;
+    // An input that is not a finite number is refused before any step (docs/protocol.md, ADVANCE), as the
+    // protocol's code for it says; "diverged" is for a solution that blew up.
+    if (force)
+        for (std::size_t i = 0; i < force->values.size(); ++i)
+            if (!std::isfinite(force->values[i] * depth))
+                throw SolverError("bad_message", "structure: inputs[\"force\"] row " + std::to_string(i / 2) + " holds " +
+                                                     std::to_string(force->values[i]) + (std::isfinite(force->values[i]) ? " N/m, which times the section depth is not finite" : ", not a finite number"));
 
     AdvanceReply reply;
     int max_iterations = 0;

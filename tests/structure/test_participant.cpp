@@ -211,6 +211,14 @@ TEST_CASE("a damaged or mistimed checkpoint is refused") {
             CHECK(msg.find("not a finite number") != std::string::npos);
             CHECK(msg.find("the file is damaged") != std::string::npos);
         }
+    // A clamped node displaced, moving or accelerating: finite numbers no run holds (a review, 2026-11-27).
+    for (const std::size_t at : {u_at, u_at + 8 * 33, u_at + 8 * 66 + 8}) {
+        CAPTURE(at);
+        std::vector<std::uint8_t> damaged = blob;
+        const double moved = 0.5;
+        std::memcpy(damaged.data() + at, &moved, sizeof moved);
+        CHECK(message_of(damaged, t).find("bad_config: structure: the checkpoint gives node 0 a") == 0);
+    }
     // Versions 1 (no energies, before 2026-11-27) and 2 (the scale alone, the same day) are still read.
     std::vector<std::uint8_t> v2 = blob, v1 = blob;
     REQUIRE(blob[24] == '3');
@@ -374,11 +382,15 @@ TEST_CASE("errors carry the protocol's codes") {
         set(tiny, "time.dt_max", Value(2.3283064338e-12));  // 1e-2 s / this = 4.3e9 > 2^32 - 1
         StructureSolver t;
         t.init(request(tiny));
-        CHECK(code_of([&] { t.advance(window(0.0, 1e-2, 0), p); }) == "bad_config");
+        CHECK(code_of([&] { t.advance(window(0.0, 1e-2, 0), p); }) == "bad_message");
     }
+    // Inputs and windows it cannot take are refused before any step, as the protocol's codes say (a review,
+    // 2026-11-27: a NaN force was "diverged", a window of 1e-300 s an "internal" singular matrix).
     Fields nan = forces(s, 1.0);
     std::get<F64Array>(nan["force"])(3, 0) = std::nan("");
-    CHECK(code_of([&] { s.advance(window(0.0, 1e-3, 1, nan), p); }) == "diverged");
+    CHECK(code_of([&] { s.advance(window(0.0, 1e-3, 1, nan), p); }) == "bad_message");
+    CHECK(code_of([&] { s.advance(window(0.0, 1e-300, 1), p); }) == "bad_message");
+    CHECK(s.dynamics().state().t == 0.0);
     F64Array huge = F64Array::zeros(22, 2);
     huge(21, 1) = 1e300;
     try {
