@@ -44,40 +44,44 @@ Eigen::MatrixXd rigid_motions(const Model& model) {
     int parts = 0;
     for (int i = 0; i < n; ++i)
         if (column[root(i)] < 0) column[root(i)] = parts++;
-    std::vector<Vec2> centroid(parts, Vec2::Zero());
-    std::vector<int> count(parts, 0);
-    for (int i = 0; i < n; ++i) {
-        centroid[column[root(i)]] += model.nodes[i];
-        ++count[column[root(i)]];
-    }
-    for (int p = 0; p < parts; ++p) centroid[p] /= count[p];
+    std::vector<std::vector<int>> nodes_of(parts);
+    for (int i = 0; i < n; ++i) nodes_of[column[root(i)]].push_back(i);
 
-    // Rigid motions of each part: ux, uy, and a rotation about the part's centroid, which makes the three
-    // columns orthogonal (a rotation about a far origin would be nearly a translation, and the rank test
-    // below would lose it); each column then scaled to unit norm.
-    Eigen::MatrixXd R = Eigen::MatrixXd::Zero(model.dof_count(), 3 * parts);
-    for (int i = 0; i < n; ++i) {
-        const int p = column[root(i)], c = 3 * p;
-        const Vec2 r = model.nodes[i] - centroid[p];
-        R(3 * i, c) = 1.0;
-        R(3 * i + 1, c + 1) = 1.0;
-        R(3 * i, c + 2) = -r.y();
-        R(3 * i + 1, c + 2) = r.x();
-        R(3 * i + 2, c + 2) = 1.0;
+    // The parts share no DOF, so each is tested alone: one SVD of all 3 x parts motions at once cost minutes
+    // for a few hundred separate posts (800 clamped posts of 5 elements: no READY after 100 s, a review,
+    // 2026-11-27), while each part's own is 3 columns.
+    std::vector<Vector> admissible;
+    for (const std::vector<int>& nodes : nodes_of) {
+        Vec2 centroid = Vec2::Zero();
+        for (int i : nodes) centroid += model.nodes[i];
+        centroid /= static_cast<double>(nodes.size());
+        // Rigid motions of the part: ux, uy, and a rotation about its centroid, which makes the three columns
+        // orthogonal (a rotation about a far origin would be nearly a translation, and the rank test below
+        // would lose it); each column then scaled to unit norm.
+        Eigen::MatrixXd R = Eigen::MatrixXd::Zero(model.dof_count(), 3);
+        for (int i : nodes) {
+            const Vec2 r = model.nodes[i] - centroid;
+            R(3 * i, 0) = 1.0;
+            R(3 * i + 1, 1) = 1.0;
+            R(3 * i, 2) = -r.y();
+            R(3 * i + 1, 2) = r.x();
+            R(3 * i + 2, 2) = 1.0;
+        }
+        R.colwise().normalize();
+        // T's columns are orthonormal (unit directions on disjoint DOFs), so R - T T^T R is the part of each
+        // motion the supports forbid; its null space is the admissible rigid motions. Its singular values
+        // are roundoff (~1e-16) on that space and of order 1/sqrt(nodes of the part) off it (one supported
+        // node's share of a unit motion). Only the part's own rows can be non-zero.
+        const Eigen::MatrixXd violation = R - model.T * (model.T.transpose() * R);
+        Eigen::MatrixXd own(3 * static_cast<Eigen::Index>(nodes.size()), 3);
+        for (std::size_t k = 0; k < nodes.size(); ++k) own.middleRows(3 * static_cast<Eigen::Index>(k), 3) = violation.middleRows(3 * nodes[k], 3);
+        Eigen::JacobiSVD<Eigen::MatrixXd> svd(own, Eigen::ComputeThinV);
+        for (int j = 0; j < svd.singularValues().size(); ++j)
+            if (svd.singularValues()[j] < 1e-8) admissible.push_back(R * svd.matrixV().col(j));
     }
-    R.colwise().normalize();
-    // T's columns are orthonormal (unit directions on disjoint DOFs), so R - T T^T R is the part of each
-    // motion the supports forbid; its null space is the admissible rigid motions. Its singular values are
-    // roundoff (~1e-16) on that space and of order 1/sqrt(nodes of the part) off it (one supported node's
-    // share of a unit motion).
-    const Eigen::MatrixXd violation = R - model.T * (model.T.transpose() * R);
-    Eigen::JacobiSVD<Eigen::MatrixXd> svd(violation, Eigen::ComputeThinV);
-    std::vector<int> free_combinations;
-    for (int j = 0; j < svd.singularValues().size(); ++j)
-        if (svd.singularValues()[j] < 1e-8) free_combinations.push_back(j);
-    Eigen::MatrixXd C(R.cols(), static_cast<Eigen::Index>(free_combinations.size()));
-    for (std::size_t k = 0; k < free_combinations.size(); ++k) C.col(static_cast<Eigen::Index>(k)) = svd.matrixV().col(free_combinations[k]);
-    return model.T.transpose() * (R * C);  // admissible: T times this is R C itself
+    Eigen::MatrixXd C(model.dof_count(), static_cast<Eigen::Index>(admissible.size()));
+    for (std::size_t k = 0; k < admissible.size(); ++k) C.col(static_cast<Eigen::Index>(k)) = admissible[k];
+    return model.T.transpose() * C;  // admissible: T times this is C itself
 }
 
 void count_rigid(Modes& modes, int rigid) { modes.rigid_body = std::min<int>(rigid, static_cast<int>(modes.omega2.size())); }
