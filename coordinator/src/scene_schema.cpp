@@ -106,7 +106,10 @@ void coupling_section(schema::TableSchema& s) {
 }
 
 void load_section(schema::TableSchema& s) {
-    auto& l = s.table("load", "Prescribed interface force for a structure run alone, spread evenly over the interface vertices.");
+    auto& l = s.table("load", "Prescribed interface force for a structure run alone, spread evenly over the interface vertices. "
+                              "Each share acts where its vertex is, as a fluid's force would: on a member whose "
+                              "interface_padding differs between its sides, a force along the member also turns it "
+                              "(the two faces' moment arms no longer cancel).");
     l.vector("force", 2, "Total force (x, y) on the interface.").unit("N/m").fallback(Value::Array{0.0, 0.0});
     l.choice("profile", {"constant", "ramp", "sine"}, "constant from t = 0; ramp: linear over ramp_time then constant; "
              "sine: force * sin(2 pi frequency t).").fallback("constant");
