@@ -337,7 +337,8 @@ TableSchema build() {
         .fallback("generalized_alpha");
     time.number("rho_inf", "generalized_alpha: spectral radius at omega dt -> infinity (1 = no damping)")
         .at_least(0).at_most(1).fallback(0.9);
-    time.number("dt_max", "largest step the structure accepts").unit("s").greater_than(0).fallback(1e-3);
+    time.number("dt_max", "largest step the structure asks for (ADVANCED dt_wanted); sub-steps the coordinator "
+                          "sets are taken as sent").unit("s").greater_than(0).fallback(1e-3);
     time.integer("resolved_modes", "the accuracy limit on the step resolves this many lowest elastic modes")
         .at_least(1).at_most(50).fallback(3);
     time.number("steps_per_period", "accuracy limit: at least this many steps per period of the highest resolved mode, "
@@ -369,7 +370,7 @@ TableSchema build() {
     auto& init = s.table("initial", "Initial state at t0 (default: undeformed, at rest); READY passes the interface's "
                                     "state at t0 on to the fluid and the watchpoints");
     init.boolean("static_equilibrium", "start from static equilibrium under the structure's own loads at t0 (point "
-                                       "loads, self-weight, and any preload); not under the coordinator's [load], "
+                                       "and distributed loads, self-weight, and any preload); not under the coordinator's [load], "
                                        "which the structure first receives with the first window (a constant [load] "
                                        "with this key is refused)")
         .fallback(false);
