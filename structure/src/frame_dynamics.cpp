@@ -167,6 +167,11 @@ void FrameDynamics::reset(double t0) {
     const Energies e = energies();
     state_.initial_energy = e.kinetic + e.strain;
     state_.energy_scale = state_.initial_energy;
+    // An infinite start (mode_amplitude = 1e200 passed every bound) left the energy check comparing inf with inf,
+    // NaN, which silently turned it off (a review, 2026-11-27).
+    if (!std::isfinite(state_.initial_energy))
+        throw SolverError("bad_config", "structure.initial: the start's strain energy is not a finite number (" +
+                                            std::to_string(state_.initial_energy) + "); mode_amplitude or preload is out of all proportion");
 }
 
 Vector FrameDynamics::scene_load(double t) const { return loads_.at(t, state_.u, !linear()); }

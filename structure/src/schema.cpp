@@ -194,7 +194,9 @@ void check_structure(const Value& s, const std::string& path, Errors& errors) {
     }
 
     if (const Value* init = s.find("initial")) {
-        bool statics = init->at("static_equilibrium").as_bool() || init->contains("preload");
+        // preload = [] loads nothing: no static start (the solver reads it so too, FrameDynamics::reset).
+        const Value* preload = init->find("preload");
+        bool statics = init->at("static_equilibrium").as_bool() || (preload && preload->is_array() && !preload->as_array().empty());
         const auto mode = init->at("mode").as_int();
         if (statics && mode > 0)
             errors.add(init, "key '" + path + ".initial': a mode-shape start (mode > 0) and a static start "

@@ -373,6 +373,10 @@ TEST_CASE("errors carry the protocol's codes") {
     set(bad, "material.E", Value(-1.0));
     StructureSolver s;
     CHECK(code_of([&] { s.init(request(bad)); }) == "bad_config");
+    Value boundless = coupled_scene();  // an infinite start turned the energy check off (inf - inf), silently
+    set(boundless, "initial.mode", Value(1));
+    set(boundless, "initial.mode_amplitude", Value(1e200));
+    CHECK(code_of([&] { s.init(request(boundless)); }) == "bad_config");
 
     s.init(request(coupled_scene()));
     Progress p;

@@ -23,6 +23,16 @@ bool mentions(const std::string& s, const std::string& what) { return s.find(wha
 }  // namespace
 
 TEST_SUITE("schema") {
+TEST_CASE("an empty preload is no static start beside a mode start") {
+    // preload = [] loads nothing, and the solver starts from the mode alone; the schema refused the pair as two
+    // starts (a review, 2026-11-27). A preload that loads is still refused beside a mode.
+    Value s = beam(10);
+    sphfsi::set_path(s, "initial", table({{"mode", Value(1)}, {"mode_amplitude", Value(0.01)}, {"preload", Value(Value::Array{})}}));
+    CHECK(problem(s) == "");
+    sphfsi::set_path(s, "initial.preload", Value(Value::Array{point_load(L, 0, 0, -1)}));
+    CHECK(mentions(problem(s), "exclude each other"));
+}
+
 TEST_CASE("a minimal scene validates and gets every default, also of absent sub-tables") {
     const Value v = validated_config(beam(10));
     CHECK(v.at("mass").as_string() == "consistent");
