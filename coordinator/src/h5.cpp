@@ -96,9 +96,9 @@ void Series::append(const void* rows, hsize_t count) {
     rows_ += count;
 }
 
-void Series::read(void* rows, hsize_t count) const {
+void Series::read(void* rows, hsize_t count, hsize_t first) const {
     if (count == 0) return;
-    std::vector<hsize_t> start{0}, n{count};
+    std::vector<hsize_t> start{first}, n{count};
     for (hsize_t d : row_shape_) {
         start.push_back(0);
         n.push_back(d);

@@ -111,6 +111,8 @@ Recorder::Recorder(std::filesystem::path file, const RunMetadata& meta, std::opt
     try {
         h5_ = h5::create_file(resuming_.path().string());
         copy_history(file_, *resume_at);
+        // The copied attributes name the build that started the run; a resume may run another build.
+        h5::set_attribute(h5_.get(), "resumed_by", meta.software_version + " (" + meta.git_revision + ")");
         set_status("running (resumed)");
         flush();
     } catch (const std::exception& e) {
@@ -154,16 +156,24 @@ void Recorder::copy_history(const std::filesystem::path& old_file, double until)
         std::vector<double> t = read_all(time_path);
         for (double x : t)  // the largest, not the last: a kill can leave a row extended but unwritten (0)
             resuming_.holds(x);
+        // Rows in time order up to `until`: a row a kill left extended but unwritten reads 0 and ends them.
         hsize_t keep = 0;
-        while (keep < t.size() && t[keep] <= until * (1 + 1e-12)) ++keep;
+        while (keep < t.size() && t[keep] <= until * (1 + 1e-12) && (keep == 0 || t[keep] > t[keep - 1])) ++keep;
         return keep;
     };
+    // In blocks of at most 64 MiB: a whole dataset at once is 3.2 GB of positions for 100,000 particles and
+    // 2,000 frames (a review, 2026-11-27).
     auto copy_rows = [&](const std::string& path, hsize_t keep, hsize_t chunk_rows) {
         h5::Series s(src.get(), path);
         keep = std::min(keep, s.rows());
-        std::vector<unsigned char> buf(keep * s.row_bytes());
-        s.read(buf.data(), keep);
-        series(path, s.row_shape(), s.is_int(), chunk_rows).append(buf.data(), keep);
+        h5::Series& to = series(path, s.row_shape(), s.is_int(), chunk_rows);
+        const hsize_t block = std::max<hsize_t>(1, (hsize_t{64} << 20) / std::max<hsize_t>(1, s.row_bytes()));
+        std::vector<unsigned char> buf(std::min(keep, block) * s.row_bytes());
+        for (hsize_t from = 0; from < keep; from += block) {
+            const hsize_t rows = std::min(block, keep - from);
+            s.read(buf.data(), rows, from);
+            to.append(buf.data(), rows);
+        }
     };
     // A kill during a flush can leave the datasets of one table a row apart (HDF5 updates them one after
     // another): keep only the rows every one of them has, so the copy is one consistent table again.
@@ -322,7 +332,11 @@ void Recorder::append_frame(const std::string& role, double t, const protocol::F
     series(group + "time", {}, false, 256).append(&t, 1);
     frame_times_[role].push_back(t);
     flush();
-    if (fields.count("position")) write_xdmf(role);
+    // The sidecar is rewritten whole (atomically), so rewriting it at every frame cost writes growing with the
+    // square of the frame count (2.5 KB a frame: 125 GB over 10,000 frames, a review, 2026-11-27). It is
+    // rewritten at each of the first 100 frames, then at every (frames / 100)-th, and when the status is set.
+    const std::size_t frames = frame_times_[role].size();
+    if (fields.count("position") && (frames <= 100 || frames % (frames / 100) == 0)) write_xdmf(role);
 }
 
 std::size_t Recorder::frames(const std::string& role) const {
@@ -335,6 +349,7 @@ std::size_t Recorder::frames(const std::string& role) const {
 // windows, a review, 2026-11-27).
 void Recorder::set_status(const std::string& status) {
     flush();
+    if (series_.count("/frames/fluid/position")) write_xdmf("fluid");  // every frame, whatever the throttle skipped
     h5::set_attribute(h5_.get(), "status", status);
     h5::flush(h5_.get());
 }
@@ -373,14 +388,19 @@ void Recorder::write_xdmf(const std::string& role) {
     if (pos.row_shape().size() != 2 || (pos.row_shape()[1] != 2 && pos.row_shape()[1] != 3)) return;
     const hsize_t n = pos.row_shape()[0], dims = pos.row_shape()[1];
     const std::string h5name = file_.filename().string();
-    // One row of a (frames, n, comps) dataset as an (n, comps) array.
+    // One row of a (frames, n, comps) dataset as an (n, comps) array; `comps` 0: a (frames, n) dataset, whose
+    // rows are 1-D (a foreign participant may send such fields; declared with three axes, they read wrong).
     auto slab = [&](std::ostringstream& x, hsize_t row, const std::string& field, hsize_t comps, bool is_int) {
         x << "<DataItem ItemType=\"HyperSlab\" Dimensions=\"" << n;
         if (comps > 1) x << ' ' << comps;
-        x << "\">\n<DataItem Dimensions=\"3 3\" Format=\"XML\">" << row << " 0 0 1 1 1 1 " << n << ' ' << comps
-          << "</DataItem>\n<DataItem Dimensions=\"" << pos.rows() << ' ' << n << ' ' << comps << "\" NumberType=\""
-          << (is_int ? "Int\" Precision=\"4" : "Float\" Precision=\"8") << "\" Format=\"HDF\">" << h5name << ':' << group
-          << field << "</DataItem>\n</DataItem>\n";
+        if (comps == 0)
+            x << "\">\n<DataItem Dimensions=\"3 2\" Format=\"XML\">" << row << " 0 1 1 1 " << n
+              << "</DataItem>\n<DataItem Dimensions=\"" << pos.rows() << ' ' << n;
+        else
+            x << "\">\n<DataItem Dimensions=\"3 3\" Format=\"XML\">" << row << " 0 0 1 1 1 1 " << n << ' ' << comps
+              << "</DataItem>\n<DataItem Dimensions=\"" << pos.rows() << ' ' << n << ' ' << comps;
+        x << "\" NumberType=\"" << (is_int ? "Int\" Precision=\"4" : "Float\" Precision=\"8") << "\" Format=\"HDF\">"
+          << h5name << ':' << group << field << "</DataItem>\n</DataItem>\n";
     };
     std::ostringstream x;
     x.precision(17);  // frame times to the last bit: 6 digits merged frames 1 us apart late in a run
@@ -400,10 +420,10 @@ void Recorder::write_xdmf(const std::string& role) {
             if (field == "position" || field == "time" || s.row_shape().empty() || s.row_shape().size() > 2 ||
                 s.row_shape()[0] != n)
                 continue;
-            const hsize_t comps = s.row_shape().size() > 1 ? s.row_shape()[1] : 1;
+            const hsize_t comps = s.row_shape().size() > 1 ? s.row_shape()[1] : 0;
             // XDMF's Vector means 3 components; 2D vectors go in as Matrix (n x 2), read as 2-component arrays.
             x << "<Attribute Name=\"" << field << "\" AttributeType=\""
-              << (comps == 1 ? "Scalar" : comps == 3 ? "Vector" : "Matrix") << "\" Center=\"Node\">\n";
+              << (comps <= 1 ? "Scalar" : comps == 3 ? "Vector" : "Matrix") << "\" Center=\"Node\">\n";
             slab(x, row, field, comps, s.is_int());
             x << "</Attribute>\n";
         }

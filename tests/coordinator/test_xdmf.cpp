@@ -49,11 +49,36 @@ TEST_CASE("the XDMF sidecar lists the fluid's frames and only the fields XDMF ca
         CHECK(count(text, "Attribute Name=\"pressure\"") == 2);
         CHECK(count(text, "stress") == 0);  // in record.h5, not in the sidecar
         CHECK(text.find("Dimensions=\"2 5 3\"") != std::string::npos);  // position's dataset, as it is
+        // pressure's rows are 1-D: its dataset is (frames, n), and was declared (frames, n, 1) (a review).
+        CHECK(text.find("Dimensions=\"2 5\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">record.h5:/frames/fluid/pressure") != std::string::npos);
+        CHECK(text.find("Dimensions=\"2 5 1\"") == std::string::npos);
 
         Fields structure;  // a foreign structure sending positions too
         structure["position"] = F64Array({3, 2}, std::vector<double>(6, 0.0));
         rec.append_frame("structure", 0.1, structure);
         CHECK(read_text(dir / "record.xdmf") == text);
+    }
+    std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("the sidecar is rewritten at every frame up to the 100th, then at every (frames / 100)-th, and at the status") {
+    // Rewritten whole at every frame, it cost writes growing with the square of the frame count (a review,
+    // 2026-11-27). After a SIGKILL it may miss the latest frames, under 1 % of them; record.h5 holds them.
+    const auto dir = std::filesystem::temp_directory_path() / ("sphfsi-xdmf-throttle-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    {
+        sphfsi::coordinator::Recorder rec(dir / "record.h5", sphfsi::coordinator::RunMetadata{});
+        Fields fluid;
+        fluid["position"] = F64Array({2, 2}, std::vector<double>(4, 0.5));
+        auto listed = [&] { return count(read_text(dir / "record.xdmf"), "<Time Value="); };
+        for (int k = 0; k < 100; ++k) rec.append_frame("fluid", 0.01 * k, fluid);
+        CHECK(listed() == 100);
+        rec.append_frame("fluid", 1.00, fluid);  // 101: 101 % 1 == 0
+        CHECK(listed() == 101);
+        for (int k = 101; k < 201; ++k) rec.append_frame("fluid", 0.01 * k, fluid);
+        CHECK(listed() == 200);  // 201 % 2 != 0: not rewritten at the 201st
+        rec.set_status("completed");
+        CHECK(listed() == 201);
     }
     std::filesystem::remove_all(dir);
 }

@@ -245,6 +245,7 @@ def test_a_checkpoint_is_published_only_after_the_resumed_copy_took_over():
     assert code == 0, text
     with harness.record(os.path.join(out, "record.h5")) as f:
         assert f.attrs["status"] == "completed"
+        assert f.attrs["resumed_by"] == f'{f.attrs["software_version"]} ({f.attrs["git_revision"]})'  # the same build
         t = f["windows/t"][:]
         assert len(t) == 20 and max(abs(t - 0.01 * np.arange(1, 21))) < 1e-9, t
 

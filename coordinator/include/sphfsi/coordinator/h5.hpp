@@ -38,7 +38,7 @@ public:
            bool compress);
     Series(hid_t parent, const std::string& path);  // opens an existing one
     void append(const void* rows, hsize_t count);   // `count` rows, row-major
-    void read(void* rows, hsize_t count) const;      // the first `count` rows, row-major
+    void read(void* rows, hsize_t count, hsize_t first = 0) const;  // `count` rows from row `first`, row-major
     std::size_t row_bytes() const;
     hsize_t rows() const { return rows_; }
     const std::vector<hsize_t>& row_shape() const { return row_shape_; }
