@@ -177,8 +177,9 @@ int Runner::execute() {
         return 2;
     }
     if (!resume)  // a fresh run: what an earlier run left here must not be resumed or read as this run's
-        for (const char* stale : {"checkpoint.bin", "record.xdmf", "watchpoints.csv", "watchpoints.csv.tmp", "watchpoints.csv.resuming",
-                                  "record.h5.resuming", "record.h5.creating"})
+        for (const char* stale : {"checkpoint.bin", "checkpoint.bin.tmp", "record.xdmf", "record.xdmf.tmp", "watchpoints.csv",
+                                  "watchpoints.csv.tmp", "watchpoints.csv.resuming", "record.h5.resuming", "record.h5.creating",
+                                  "record.h5.interrupted"})
             std::filesystem::remove(opt_.out_dir / stale);
     log_file_.open(opt_.out_dir / "run.log", resume ? std::ios::app : std::ios::trunc);
     const Value& run = scene_.section("run");

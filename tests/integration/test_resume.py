@@ -335,9 +335,14 @@ def test_a_fresh_run_leaves_nothing_of_an_earlier_run_to_resume():
     harness.sphfsi("run", SCENE, "--out", out, "--quiet", "--set", "run.end_time=1.0", "--set",
                    "run.checkpoint_interval=0.5", check=0, timeout=60)
     assert os.path.exists(os.path.join(out, "checkpoint.bin"))
+    leftovers = ["checkpoint.bin.tmp", "record.xdmf.tmp", "record.h5.interrupted"]  # of kills and older builds
+    for name in leftovers:
+        with open(os.path.join(out, name), "w") as f:
+            f.write("left by an earlier run")
     harness.sphfsi("run", SCENE, "--out", out, "--quiet", "--overwrite", "--set", "run.end_time=0.05", "--set",
                    "run.output_interval=0.01", check=0, timeout=60)  # ends before its first checkpoint
-    assert not os.path.exists(os.path.join(out, "checkpoint.bin"))
+    for name in ["checkpoint.bin"] + leftovers:
+        assert not os.path.exists(os.path.join(out, name)), name
     code, text = harness.sphfsi("run", "--resume", out)
     assert code == 2 and "completed; there is nothing to resume" in text, (code, text)  # said first (a review)
     import h5py
