@@ -347,11 +347,18 @@ std::size_t Recorder::frames(const std::string& role) const {
 // The rows still buffered reach the file first, then the status: a kill between the two flushes leaves a
 // status that describes no more than the rows on disk ("completed" once came out one flush before the last
 // windows, a review, 2026-11-27).
-void Recorder::set_status(const std::string& status) {
+std::string Recorder::set_status(const std::string& status) {
     flush();
-    if (series_.count("/frames/fluid/position")) write_xdmf("fluid");  // every frame, whatever the throttle skipped
-    h5::set_attribute(h5_.get(), "status", status);
+    std::string written = status;
+    try {
+        if (series_.count("/frames/fluid/position")) write_xdmf("fluid");  // every frame, whatever the throttle skipped
+    } catch (const std::exception& e) {
+        // A run that completed has not, if its sidecar cannot be written; a run already stopped keeps its cause.
+        if (status == "completed") written = std::string("failed: ") + e.what();
+    }
+    h5::set_attribute(h5_.get(), "status", written);
     h5::flush(h5_.get());
+    return written;
 }
 
 void Recorder::set_number(const std::string& name, double value) { h5::set_attribute(h5_.get(), name, value); }

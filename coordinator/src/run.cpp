@@ -177,9 +177,10 @@ int Runner::execute() {
         return 2;
     }
     if (!resume)  // a fresh run: what an earlier run left here must not be resumed or read as this run's
-        for (const char* stale : {"checkpoint.bin", "checkpoint.bin.tmp", "record.xdmf", "record.xdmf.tmp", "watchpoints.csv",
-                                  "watchpoints.csv.tmp", "watchpoints.csv.resuming", "record.h5.resuming", "record.h5.creating",
-                                  "record.h5.interrupted"})
+        // (checkpoint.bin.tmp and record.xdmf.tmp are not here: each write replaces its own, and nothing reads them.
+        // record.h5.interrupted is: --resume refuses to guess while it is there.)
+        for (const char* stale : {"checkpoint.bin", "record.xdmf", "watchpoints.csv", "watchpoints.csv.tmp", "watchpoints.csv.resuming",
+                                  "record.h5.resuming", "record.h5.creating", "record.h5.interrupted"})
             std::filesystem::remove(opt_.out_dir / stale);
     log_file_.open(opt_.out_dir / "run.log", resume ? std::ios::app : std::ios::trunc);
     const Value& run = scene_.section("run");
@@ -244,7 +245,11 @@ int Runner::execute() {
         recorder_->set_number("interface_work", iface_.work_total);
         recorder_->set_number("interface_energy_created", iface_.created_total);
     }
-    recorder_->set_status(status);  // after every row and total above is on disk
+    if (const std::string written = recorder_->set_status(status); written != status) {  // after every row and total above
+        log("error: " + written.substr(std::string("failed: ").size()));
+        status = written;
+        code = 1;
+    }
     if (watchpoints_) watchpoints_->flush();
     if (code == 0) {  // a completed resume replaces the interrupted files whatever time they reached
         take_over_when_caught_up(std::numeric_limits<double>::infinity());

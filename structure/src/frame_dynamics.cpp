@@ -342,8 +342,10 @@ StepReport FrameDynamics::step(double h, const Vector& extra) {
             if (!std::isfinite(norm)) {
                 check_finite(u, "displacement", state_.t + h);
                 check_finite(fint, "internal force", state_.t + h);
-                throw SolverError("diverged", "structure: step " + std::to_string(state_.step + 1) +
-                                                  ": Newton residual is not finite");
+                throw SolverError("diverged", "structure: step " + std::to_string(state_.step + 1) + ", t=" + num(state_.t + h) +
+                                                  ", dt=" + num(h) + ": Newton residual is not finite with finite "
+                                                  "displacements and internal forces (the loads, inertia or damping "
+                                                  "overflowed); reduce dt_max or check the loads");
             }
             if (norm <= tol * scale || scale == 0.0) break;
             if (k == max_it)

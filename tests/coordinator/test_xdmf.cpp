@@ -77,8 +77,13 @@ TEST_CASE("the sidecar is rewritten at every frame up to the 100th, then at ever
         CHECK(listed() == 101);
         for (int k = 101; k < 201; ++k) rec.append_frame("fluid", 0.01 * k, fluid);
         CHECK(listed() == 200);  // 201 % 2 != 0: not rewritten at the 201st
-        rec.set_status("completed");
+        CHECK(rec.set_status("completed") == "completed");
         CHECK(listed() == 201);
+        // The last write can fail too (here a directory stands where its temporary file goes): the run has not
+        // completed then, and the status says why.
+        std::filesystem::create_directories(dir / "record.xdmf.tmp");
+        CHECK(rec.set_status("completed").rfind("failed: cannot write the XDMF sidecar", 0) == 0);
+        CHECK(rec.set_status("interrupted at t = 1 s") == "interrupted at t = 1 s");  // a stop keeps its own cause
     }
     std::filesystem::remove_all(dir);
 }

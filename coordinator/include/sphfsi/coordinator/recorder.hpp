@@ -75,7 +75,10 @@ public:
     // '.', '+'; not starting with '.'; not "time", which the recorder writes) and the fields are those of the
     // role's first frame with the same shapes and types.
     void append_frame(const std::string& role, double t, const protocol::Fields& fields);
-    void set_status(const std::string& status);  // "running", "completed", "failed: ...", "interrupted"
+    // "running", "completed", "failed: ...", "interrupted". Writes the rows still buffered, then the XDMF sidecar
+    // whole, then the status; returns the status written: "completed" becomes "failed: ..." when the sidecar
+    // cannot be written.
+    std::string set_status(const std::string& status);
     void set_number(const std::string& name, double value);  // a root attribute (totals, CPU use)
     void set_text(const std::string& name, const std::string& value);
     void flush();                                // writes buffered windows and flushes the file
