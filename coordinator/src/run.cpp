@@ -170,8 +170,11 @@ int Runner::execute() {
     lock_ = std::make_unique<DirLock>(opt_.out_dir);
     // An earlier run's record is only replaced on request: a re-run into the same folder that fails at once
     // (a typo in --set, a participant that cannot start) would otherwise have cost the earlier results.
-    if (!resume && !opt_.overwrite && std::filesystem::exists(opt_.out_dir / "record.h5")) {
-        std::cerr << "sphfsi: " << opt_.out_dir.string() << " already holds a run's record (record.h5); pass "
+    // record.h5.interrupted too: an older build's resume that died left the history there (Recorder).
+    if (!resume && !opt_.overwrite &&
+        (std::filesystem::exists(opt_.out_dir / "record.h5") || std::filesystem::exists(opt_.out_dir / "record.h5.interrupted"))) {
+        std::cerr << "sphfsi: " << opt_.out_dir.string() << " already holds a run's record (record.h5, or an older "
+                  << "build's record.h5.interrupted); pass "
                   << "--overwrite to replace it, --resume " << opt_.out_dir.string()
                   << " to continue it, or choose another --out" << std::endl;
         return 2;

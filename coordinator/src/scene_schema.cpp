@@ -116,7 +116,7 @@ void load_section(schema::TableSchema& s) {
     l.number("ramp_time", "Duration of the ramp.").unit("s").greater_than(0).fallback(1.0);
     l.number("frequency", "Frequency of the sine profile. The load is held at its midpoint value over each window, "
                           "and windows are at most 1/20 of its period (shorter than the structure's own step if need be).")
-        .unit("Hz").greater_than(0).fallback(1.0);
+        .unit("Hz").greater_than(0).at_most(1e6).fallback(1.0);  // windows of 1/(20 f): 50 ns at 1 MHz
 }
 
 // A name is a column label for charts and tools, not a description: 64 characters is room enough, and it keeps

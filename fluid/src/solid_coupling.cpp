@@ -78,18 +78,18 @@ std::vector<Vec2> InterfaceCoupling::displaced_positions(const std::vector<doubl
 void InterfaceCoupling::begin_window(double t0, double dt, const protocol::F64Array* displacement,
                                      const protocol::F64Array* velocity) {
     const std::size_t n = reference_.size();
+    // Both shapes first: a refused window (bad_message) must change nothing (docs/protocol.md §3), and a
+    // CHECKPOINT after it once stored the half-started window.
+    if (displacement) check_shape(*displacement, n, "displacement");
+    if (velocity) check_shape(*velocity, n, "velocity");
     state_.t0 = t0;
     state_.dt = dt;
     state_.u1 = state_.u0;
     state_.v1 = state_.v0;
-    if (displacement) {
-        check_shape(*displacement, n, "displacement");
+    if (displacement)
         for (std::size_t i = 0; i < n; ++i) state_.u1[i] = row(*displacement, i);
-    }
-    if (velocity) {
-        check_shape(*velocity, n, "velocity");
+    if (velocity)
         for (std::size_t i = 0; i < n; ++i) state_.v1[i] = row(*velocity, i);
-    }
 }
 
 void InterfaceCoupling::end_window() {

@@ -47,7 +47,7 @@ FrameDynamics::FrameDynamics(StructureConfig config, double t0, bool fresh)
     }
     // A sine load is sampled at the step ends: its period must be resolved as a mode's is, or a load above
     // half the step rate acts as its alias (5863 Hz moved the beam as 16.7 Hz did, to the digit, a review,
-    // 2026-11-27). The coordinator bounds its [load] windows the same way.
+    // 2026-11-27). The coordinator bounds its [load] windows likewise, at 20 points a period.
     auto resolve = [&](const History& h) {
         if (h.kind == History::Kind::Sine) dt_accuracy_ = std::min(dt_accuracy_, 1.0 / (h.frequency * config_.time.steps_per_period));
     };

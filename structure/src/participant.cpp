@@ -101,7 +101,7 @@ AdvanceReply StructureSolver::advance(const AdvanceRequest& request, Progress& p
     const double h = request.dt / n;
     // The integrators divide by h^2 (Newmark's 1/(beta h^2)): a sub-step whose square underflows is not one
     // they can take. It was reported as an internal "singular effective matrix" with no step or time.
-    if (!std::isfinite(1.0 / (h * h)))
+    if (!std::isfinite(4.0 / (h * h)))  // 1/beta <= 4 for every integrator here (Newmark and generalized-alpha)
         throw SolverError("bad_message", "structure: a sub-step of " + seconds(h) + " is too short to integrate (1/h^2 overflows)");
 
     const F64Array* force = nullptr;

@@ -39,7 +39,9 @@ void add_history_keys(TableSchema& t) {
         .fallback("constant");
     t.number("ramp_time", "duration of the linear ramp from 0 to the full load (history = \"ramp\")")
         .unit("s").greater_than(0).fallback(1.0);
-    t.number("frequency", "frequency of the sine (history = \"sine\")").unit("Hz").greater_than(0).fallback(1.0);
+    // At most 1 MHz: the structure steps 20 times a period (time.steps_per_period), and beyond that the step
+    // would vanish (1e307 Hz made it 0, a review, 2026-11-27).
+    t.number("frequency", "frequency of the sine (history = \"sine\")").unit("Hz").greater_than(0).at_most(1e6).fallback(1.0);
     t.number("phase", "phase of the sine at start_time (history = \"sine\")").unit("rad").fallback(0.0);
     t.number("start_time", "the load is zero before this time").unit("s").fallback(0.0);
     t.number("end_time", "the load is zero from this time on; absent = never switched off").unit("s");

@@ -487,12 +487,13 @@ TEST_SUITE("adapter") {
             CHECK(init_verdict(r).rfind("bad_config: fluid.gate", 0) == 0);
         }
         {  // An input of the wrong shape or dtype is a bad array: bad_message (docs/protocol.md, ERROR codes).
-            auto code_of = [&](sphfsi::protocol::Field displacement) {
+            const auto before = s.checkpoint();
+            auto code_with = [&](sphfsi::protocol::Field displacement, sphfsi::protocol::Field velocity) {
                 sphfsi::protocol::AdvanceRequest bad;
                 bad.t = 0.0;
                 bad.dt = 1e-3;
                 bad.inputs["displacement"] = std::move(displacement);
-                bad.inputs["velocity"] = F64Array::zeros(nv, 2);
+                bad.inputs["velocity"] = std::move(velocity);
                 Progress progress;
                 try {
                     s.advance(bad, progress);
@@ -501,11 +502,18 @@ TEST_SUITE("adapter") {
                 }
                 return std::string("accepted");
             };
+            auto code_of = [&](sphfsi::protocol::Field displacement) { return code_with(std::move(displacement), F64Array::zeros(nv, 2)); };
             CHECK(code_of(F64Array::zeros(nv - 1, 2)) == "bad_message");
             CHECK(code_of(sphfsi::protocol::I32Array::zeros(nv, 2)) == "bad_message");
             F64Array not_finite = F64Array::zeros(nv, 2);  // at a vertex whatever its side: wet or dry
             not_finite(nv - 1, 1) = std::numeric_limits<double>::quiet_NaN();
             CHECK(code_of(not_finite) == "bad_message");
+            // A refused window changes nothing (docs/protocol.md §3): the good displacement beside a bad velocity
+            // was taken into the window's state first, and a CHECKPOINT then stored the half-started window.
+            F64Array moved = F64Array::zeros(nv, 2);
+            moved(0, 0) = 1e-4;
+            CHECK(code_with(moved, F64Array::zeros(nv + 1, 2)) == "bad_message");
+            CHECK(s.checkpoint() == before);
         }
         // At rest, after the fluid has settled around it: Archimedes, rho0 g A = 1000 * 9.81 * 0.1 * 0.02 N/m up.
         // Tolerance 10 %: the solid's SPH surface sits half a spacing outside the mesh (dp/2 = 1.25 mm on 20 mm

@@ -64,6 +64,15 @@ TEST_CASE("each kind of mistake names the key and what is allowed") {
               .find("missing required key 'fluid.block[0].width'") != std::string::npos);
 }
 
+TEST_CASE("every collected message is escaped, whatever a check quoted, and only once") {
+    // A check may quote scene text raw (the watchpoint-name rule did): Errors::add escapes control characters
+    // and bytes that are not UTF-8, and leaves text that was escaped already, UTF-8 and backslashes as they are.
+    Errors e;
+    e.add(nullptr, std::string("got \"tip\x1b[2J\xff\"; allowed: \xe2\x89\xa4 50, \\x1b stays"));
+    REQUIRE(e.items.size() == 1);
+    CHECK(e.items[0] == "got \"tip\\x1b[2J\\xff\"; allowed: \xe2\x89\xa4 50, \\x1b stays");
+}
+
 TEST_CASE("line numbers are reported when known") {
     Value dp(0.5);
     dp.line = 12;
