@@ -114,6 +114,7 @@ void Simulation2D::restore() {
     st_ = saved_;
     stepping_ = false;  // a step that failed part-way left its marks; the saved state is between steps
     density_dt_at_evaluation_ = 0.0;
+    forget_rates_without_their_correction();
     sort_particles();  // the grid belongs to the state it was built for; the saved particles are already in cell order
 }
 
@@ -166,6 +167,16 @@ void Simulation2D::read_state(ByteReader& r) {
     st_.solid_weight = r.get<double>();
     check_restored_state(st_, n, n_fluid_, n_solid_, solid_acc_);
     sort_particles();  // rebuild the grid for the restored positions (already in cell order: no reordering)
+    forget_rates_without_their_correction();
+}
+
+// The kept rates were made with the correction matrices L of their evaluation, which the state does not hold
+// (correction_ is scratch): after RESTORE they are the last iterate's, after a resume there are none, and the
+// window-start shortcut read them (a resumed coupled run crashed reading an empty L; a repeated iterate did
+// not repeat, a review, 2026-11-27). The next step then evaluates everything, which the shortcut equals bit
+// for bit (tests/fluid/test_adapter.cpp).
+void Simulation2D::forget_rates_without_their_correction() {
+    if (s_.kernel_correction) st_.rates_fresh = false;
 }
 
 }  // namespace sphfsi::fluid

@@ -45,14 +45,14 @@ Value small_dam_break(const std::string& model, const std::string& integrator = 
     return with(f, {{"time.integrator", integrator}});
 }
 
-// A horizontal plate of ny x nx quads ((0.2 .. 0.3) x (0.02 .. 0.04) m), vertices row-major.
-InterfaceMesh plate(int nx = 8, int ny = 2) {
+// A horizontal plate of ny x nx quads, (x0 .. x1) x (y0 .. y1), vertices row-major.
+InterfaceMesh plate_at(double x0, double x1, double y0, double y1, int nx, int ny) {
     InterfaceMesh m;
     m.vertices = F64Array::zeros((nx + 1) * (ny + 1), 2);
     for (int j = 0; j <= ny; ++j)
         for (int i = 0; i <= nx; ++i) {
-            m.vertices(j * (nx + 1) + i, 0) = 0.2 + 0.1 * i / nx;
-            m.vertices(j * (nx + 1) + i, 1) = 0.02 + 0.02 * j / ny;
+            m.vertices(j * (nx + 1) + i, 0) = x0 + (x1 - x0) * i / nx;
+            m.vertices(j * (nx + 1) + i, 1) = y0 + (y1 - y0) * j / ny;
         }
     m.cells = I32Array::zeros(nx * ny, 4);
     for (int j = 0; j < ny; ++j)
@@ -66,6 +66,9 @@ InterfaceMesh plate(int nx = 8, int ny = 2) {
         }
     return m;
 }
+
+// The plate most tests use: 8 x 2 quads, (0.2 .. 0.3) x (0.02 .. 0.04) m.
+InterfaceMesh plate(int nx = 8, int ny = 2) { return plate_at(0.2, 0.3, 0.02, 0.04, nx, ny); }
 
 // The WCSPH tank plate() lies in: 0.5 m x 0.2 m, water 0.1 m deep, at spacing dp.
 Value plate_tank(double dp) { return wcsph(water_tank(dp, 0.5, 0.2, 0.5, 0.1)); }
@@ -653,6 +656,63 @@ TEST_SUITE("adapter") {
                 CHECK(s.snapshot() == after_shortcut);
             }
         }
+    }
+
+    TEST_CASE("with the pressure correction, a repeated iterate repeats and a coupled resume continues exactly") {
+        // The kept rates were made with correction matrices L that the state does not hold. After RESTORE the
+        // window-start shortcut read the last iterate's L: iterate X, then Y, then X again gave another X in
+        // 28 of 600 windows of a column falling on a plate (the review's count; this case fails too without
+        // the fix). After a resume there was no L at all, and the first window read past an empty vector (a
+        // resumed coupled run ended in SIGSEGV). Both found by a review, 2026-11-27; the state's rates are now
+        // evaluated afresh after RESTORE and after a resume.
+        // The review's case: a 0.2 x 0.4 m column at dp = 0.02 m whose surge reaches a 0.15 m plate of 3 cells
+        // 0.3 m up, one step a window from t = 0.25 s; iterate X holds the plate still, Y lifts it at 0.05 m/s.
+        SphSolver s;
+        sphfsi::protocol::InitRequest req;
+        req.config = with(wcsph(water_tank(0.02, 0.6, 0.6, 0.2, 0.4)),
+                          {{"pressure.kernel_correction", true}, {"pressure.clamp_negative", false}, {"threads", 1}});
+        req.interface = plate_at(0.35, 0.5, 0.3, 0.36, 3, 1);
+        const std::size_t nv = 8;
+        auto moving = [&](double vy, double window) {
+            F64Array disp = F64Array::zeros(nv, 2), vel = F64Array::zeros(nv, 2);
+            for (std::size_t v = 0; v < nv; ++v) {
+                disp(v, 1) = 0.5 * vy * window;
+                vel(v, 1) = vy;
+            }
+            return Fields{{"displacement", disp}, {"velocity", vel}};
+        };
+        double window = s.init(req).dt_wanted;
+        while (s.simulation().time() < 0.25) window = step(s, 3 * window, 3, moving(0.0, 3 * window)).dt_wanted;  // the surge nears the plate
+        std::size_t differed = 0;
+        for (int k = 0; k < 600; ++k) {
+            s.save();
+            const auto x = step(s, window, 1, moving(0.0, window));
+            const Fields after_x = s.snapshot();
+            s.restore();
+            step(s, window, 1, moving(0.05, window));
+            s.restore();
+            const auto again = step(s, window, 1, moving(0.0, window));
+            differed += !(std::get<F64Array>(again.outputs.at("force")) == std::get<F64Array>(x.outputs.at("force")) &&
+                          s.snapshot() == after_x);
+            window = again.dt_wanted;
+        }
+        CHECK(differed == 0);
+        const auto bytes = s.checkpoint();
+        const double t = s.simulation().time();
+        Fields last = moving(0.0, window);  // the window-end kinematics the resumed fluid starts from
+        SphSolver resumed;
+        sphfsi::protocol::InitRequest again = req;
+        again.t0 = t;
+        again.state = bytes;
+        again.interface_state = last;
+        resumed.init(again);
+        for (int k = 0; k < 5; ++k) {
+            const auto a = step(s, window, 1, moving(0.0, window));
+            const auto b = step(resumed, window, 1, moving(0.0, window));
+            CHECK(std::get<F64Array>(a.outputs.at("force")) == std::get<F64Array>(b.outputs.at("force")));
+            window = a.dt_wanted;
+        }
+        CHECK(resumed.snapshot() == s.snapshot());
     }
 
     TEST_CASE("a window's force answers that window's wall acceleration, iterate by iterate") {

@@ -125,6 +125,7 @@ private:
 
     void evaluate();
     void refresh_solid_rates();
+    void forget_rates_without_their_correction();  // after the state was replaced (RESTORE, resume)
     const RateFactors* fill_rate_factors();  // into scratch_, for compute_rates
     // The pressure term's correction matrices for the positions now held (pressure.kernel_correction only).
     template <class KernelG>
