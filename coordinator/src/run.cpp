@@ -98,6 +98,7 @@ private:
         bool checkpoint;  // a checkpoint is taken there
     };
     Stop next_stop() const;
+    double structure_alone_step() const;
     // A resume's copies replace record.h5 and watchpoints.csv, each once the run has reached the time that file
     // ends at: until then it holds more than its copy, and a resume that stops must leave it.
     void take_over_when_caught_up(double t) {
@@ -416,12 +417,7 @@ WindowPlan Runner::plan_window(double t_stop) const {
         p.structure_substeps = 0;
         return p;
     }
-    p.dt = structure_dt_;
-    // A sine is sampled at 20 points a period or more: sampled once per structure step, a frequency above
-    // half the step rate folded back onto a lower one (a review ran 1/dt - 100 Hz, and it moved the beam as
-    // 100 Hz did, to round-off). Held over 1/20 of a period, midpoint samples carry the sine's own frequency at
-    // sin(pi/20)/(pi/20) = 0.996 of its amplitude.
-    if (load->at("profile").as_string() == "sine") p.dt = std::min(p.dt, 1.0 / (20.0 * load->at("frequency").as_double()));
+    p.dt = p.wanted = structure_alone_step();
     p.structure_substeps = 1;
     land_on_stop(p, t_stop);
     return p;
@@ -433,14 +429,30 @@ WindowPlan Runner::plan_window(double t_stop) const {
 // (whose fluid force had been 25 times its neighbours'): a frame due a sliver before the end is taken at the end,
 // and a checkpoint due within a sliver of a frame, or of the end, is taken with that frame, or not at all (a
 // resume needs none at the end). Frames keep their times. A sliver is a quarter of the window the coupling
-// rule wants, or of the participant's own step when it runs alone (its window is then the whole gap), or of the
-// output or checkpoint interval where that is shorter: windows are no longer than those anyway, and a larger
+// rule wants, or of the participant's own step when it runs alone (its window is then the whole gap, except a
+// structure's under a load that changes in time: structure_alone_step), or of the output or checkpoint
+// interval where that is shorter: windows are no longer than those anyway, and a larger
 // sliver would fold several frames due before the end into the end's one.
+// A structure run alone under a load that changes in time steps once per window, at its own step or, for a
+// sine, at most 1/20 of a period: sampled once per structure step, a frequency above half the step rate
+// folded back onto a lower one (a review ran 1/dt - 100 Hz, and it moved the beam as 100 Hz did, to
+// round-off). Held over 1/20 of a period, midpoint samples carry the sine's own frequency at
+// sin(pi/20)/(pi/20) = 0.996 of its amplitude.
+double Runner::structure_alone_step() const {
+    const Value* load = scene_.tree.find("load");
+    if (load && load->at("profile").as_string() == "sine")
+        return std::min(structure_dt_, 1.0 / (20.0 * load->at("frequency").as_double()));
+    return structure_dt_;
+}
+
 Runner::Stop Runner::next_stop() const {
     const double frame_due = std::min(output_index_ * output_dt_, end_);
     const double checkpoint_due = (checkpoint_index_ + 1) * checkpoint_dt_;
+    // The sliver of a structure alone is of the window it takes, which a sine shortens (the structure's own
+    // step folded a frame due 0.4 ms before the end into the end's, and many shorter windows then crossed
+    // its time: it was recorded at 0.10001 s, not 0.1 s; a review, 2026-11-27).
     const double window = coupled_ ? plan_window(std::min(frame_due, checkpoint_due)).wanted
-                                   : (fluid_ ? fluid_dt_ : structure_dt_);
+                                   : (fluid_ ? fluid_dt_ : structure_alone_step());
     const double sliver = 0.25 * std::min({window, output_dt_, checkpoint_dt_});
     const double frame = end_ - frame_due < sliver ? end_ : frame_due;
     if (checkpoint_due >= end_ - sliver) return {frame, false};
