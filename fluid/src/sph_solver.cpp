@@ -169,6 +169,8 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
         start_displacement_ = u0 ? u0->values : std::vector<double>{};
     }
     if (request.interface) {
+        if (request.interface->cells.rows() == 0)  // READY with no solid particle: a coupling that did nothing
+            throw SolverError("bad_config", "the interface mesh has no cells: the fluid would feel no structure");
         check_inside_tank(*request.interface, settings_);
         try {
             coupling_.emplace(*request.interface, settings_.dp);

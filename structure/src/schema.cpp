@@ -275,7 +275,7 @@ TableSchema build() {
     mem.vector("interface_padding", 2,
                "[left, right]: extend the published cross-section beyond the faces on the member's left side "
                "(counter-clockwise from start to end) and right side. The fluid fills the cross-section with solid "
-               "particles at its own spacing, and a plate thinner than the kernel support lets water through: pad "
+               "particles at about its own spacing, and a plate thinner than the kernel support lets water through: pad "
                "a side that stays dry (the mesh moves rigidly with the section, so mapping stays exact)")
         .unit("m").at_least(0).fallback(Value::Array{0.0, 0.0});
     mem.check([](const Value& m, const std::string& path, Errors& errors) {

@@ -489,6 +489,11 @@ TEST_SUITE("adapter") {
             r.config.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, 0.4, 0.1)});
             CHECK(init_verdict(r).rfind("bad_config: fluid.gate", 0) == 0);
         }
+        {  // A mesh with no cells: READY with no solid particle, and every window's force zero (a review, 2026-11-27).
+            sphfsi::protocol::InitRequest r = req;
+            r.interface->cells = I32Array::zeros(0, 4);
+            CHECK(init_verdict(r) == "bad_config: the interface mesh has no cells: the fluid would feel no structure");
+        }
         {  // An input of the wrong shape or dtype is a bad array: bad_message (docs/protocol.md, ERROR codes).
             const auto before = s.checkpoint();
             auto code_with = [&](sphfsi::protocol::Field displacement, sphfsi::protocol::Field velocity) {
