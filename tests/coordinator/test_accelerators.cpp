@@ -96,6 +96,24 @@ TEST_SUITE("accelerators") {
         CHECK(none.empty());
     }
 
+    TEST_CASE("an Aitken factor of exactly zero starts again from the scene's factor") {
+        // Residuals r0 = (1, 0) and r1 = (1, 1): r0 . (r1 - r0) = 0 gives the factor 0, which would freeze the
+        // iterate at x1 and every later residual difference at 0 until max_iterations (a review, 2026-11-27).
+        Aitken acc(0.1);
+        SecantHistory history;
+        acc.begin_window(history);
+        Vec x0 = Vec::Zero(4), xt0(4);
+        xt0 << 1.0, 0.0, 0.0, 0.0;
+        const Vec x1 = acc.next(x0, xt0, 2);
+        CHECK(x1[0] == doctest::Approx(0.1));
+        Vec xt1 = x1;
+        xt1[0] += 1.0;
+        xt1[1] += 1.0;
+        const Vec x2 = acc.next(x1, xt1, 2);
+        CHECK(x2[0] == doctest::Approx(x1[0] + 0.1));  // moved on with the scene's factor, not frozen at x1
+        CHECK(x2[1] == doctest::Approx(x1[1] + 0.1));
+    }
+
     TEST_CASE("IQN-ILS lands on an affine map's fixed point within n + 1 updates, and at once from kept pairs") {
         const AffineStructure s = four_unknowns();
         IqnIls acc(0.1, 8);

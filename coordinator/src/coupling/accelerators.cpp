@@ -14,6 +14,9 @@ Vec Aitken::next(const Vec& x, const Vec& xt, Eigen::Index np) {
         Vec dr = r - r_prev_;
         double denom = dr.squaredNorm();
         if (denom > 0) w_ = -w_ * r_prev_.dot(dr) / denom;
+        // A factor of exactly 0 would freeze the iterate, and every later residual difference would be 0 too:
+        // the window would sit at it until max_iterations. Start again from the scene's factor.
+        if (w_ == 0.0) w_ = w0_;
     }
     r_prev_ = r;
     have_prev_ = true;

@@ -23,7 +23,8 @@ F64Array to_array(const Vec& x, const F64Array& like) {
 class ImplicitScheme : public CouplingScheme {
 public:
     ImplicitScheme(const Value& c, Session& s, Log log, std::unique_ptr<Accelerator> acc)
-        : session_(s), log_(std::move(log)), acc_(std::move(acc)), predictor_(c.at("predictor").as_string()),
+        : session_(s), log_(std::move(log)), acc_(std::move(acc)), scheme_(c.at("scheme").as_string()),
+          predictor_(c.at("predictor").as_string()),
           tol_rel_(c.at("tolerance_rel").as_double()), tol_abs_(c.at("tolerance_abs").as_double()),
           max_iter_(static_cast<int>(c.at("max_iterations").as_int())),
           fail_on_cap_(c.at("on_max_iterations").as_string() == "error") {}
@@ -82,6 +83,14 @@ public:
                 break;
             }
             x = acc_->next(x, xt, nd);
+            // Aitken's factor is unbounded and a least-squares solve can be ill-conditioned: an iterate that is
+            // not finite is the coupling's failure, named here, not the fluid's bad input.
+            if (!x.allFinite()) {
+                std::ostringstream msg;
+                msg << "coupling diverged: the " << scheme_ << " iterate of window t = " << p.t << " .. " << p.t + p.dt
+                    << " s is not finite after " << k + 1 << " iterations (residual " << o.residual << " m)";
+                throw std::runtime_error(msg.str());
+            }
         }
         acc_->end_window(o.converged);
         o.fluid.reply.substeps = fluid_substeps;
@@ -94,7 +103,7 @@ public:
         o.structure.roundtrip_s = structure_trip;
         if (!o.converged) {
             std::ostringstream msg;
-            msg << "coupling did not converge in window t = " << p.t << " s after " << o.iterations
+            msg << "coupling did not converge in window t = " << p.t << " .. " << p.t + p.dt << " s after " << o.iterations
                 << " iterations (residual " << o.residual << " m; coupling.max_iterations)";
             if (fail_on_cap_)
                 o.stop_run = msg.str();
@@ -108,7 +117,7 @@ private:
     Session& session_;
     Log log_;
     std::unique_ptr<Accelerator> acc_;
-    std::string predictor_;
+    std::string scheme_, predictor_;
     double tol_rel_, tol_abs_;
     int max_iter_;
     bool fail_on_cap_;
