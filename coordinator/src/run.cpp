@@ -203,7 +203,8 @@ int Runner::execute() {
     std::signal(SIGPIPE, SIG_IGN);
 
     RunMetadata meta{scene_.file.string(), scene_.text, "", kSoftwareVersion, kGitRevision, kProtocolVersion};
-    for (const auto& o : scene_.overrides) meta.overrides += (meta.overrides.empty() ? "" : " ") + o;
+    // One per line: a --set value may hold spaces ("load.force=[0.0, -200.0]"), which a space-joined list lost.
+    for (const auto& o : scene_.overrides) meta.overrides += (meta.overrides.empty() ? "" : "\n") + o;
     try {
         recorder_ = std::make_unique<Recorder>(opt_.out_dir / "record.h5", meta,
                                                resume ? std::optional<double>(resume->t) : std::nullopt);
