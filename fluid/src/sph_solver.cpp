@@ -46,7 +46,7 @@ double distance_to_quad(const std::array<Vec2, 4>& q, const Vec2& p) {
 // A periodic axis has no walls, and the mesh must lie within its period: solid particles go where the
 // structure puts them, never wrapped, so one across the seam would sit a period away from the water it meets
 // there in every rate that wraps positions (a review, 2026-11-27).
-void check_inside_tank(const protocol::InterfaceMesh& mesh, const FluidSettings& s) {
+void check_inside_tank(const protocol::InterfaceMesh& mesh, const FluidSettings& s, const char* where = "") {
     const double wall = s.wall_layers * s.dp;
     const double x_wall = s.periodic[0] ? 0.0 : wall, y_wall = s.periodic[1] ? 0.0 : wall;
     const double x_lo = -x_wall, x_hi = s.tank_width + x_wall, y_lo = -y_wall, y_hi = s.tank_height + y_wall;
@@ -55,9 +55,9 @@ void check_inside_tank(const protocol::InterfaceMesh& mesh, const FluidSettings&
         if (x < x_lo || x > x_hi || y < y_lo || y > y_hi) {
             char buf[400];
             std::snprintf(buf, sizeof buf,
-                          "the structure's interface mesh has vertex %llu at (%.6g, %.6g) m, outside the tank and its walls "
+                          "the structure's interface mesh has vertex %llu at (%.6g, %.6g) m%s, outside the tank and its walls "
                           "(x in [%.6g, %.6g], y in [%.6g, %.6g] m%s): fluid.tank and the structure's geometry disagree",
-                          static_cast<unsigned long long>(v), x, y, x_lo, x_hi, y_lo, y_hi,
+                          static_cast<unsigned long long>(v), x, y, where, x_lo, x_hi, y_lo, y_hi,
                           s.periodic[0] || s.periodic[1] ? ", a periodic axis's period alone" : "");
             throw SolverError("bad_config", buf);
         }
@@ -191,6 +191,13 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
             throw SolverError("bad_message", std::string("INIT interface_state: ") + e.what());
         }
         coupling->end_window();
+        // Where the structure starts, too: a deflected start (INIT's interface_state) 5 m above a 0.4 m tank was
+        // accepted (a review, 2026-11-27).
+        if (u0 && u0->values.size() == 2 * request.interface->vertices.rows()) {
+            protocol::InterfaceMesh started = *request.interface;
+            for (std::size_t i = 0; i < started.vertices.values.size(); ++i) started.vertices.values[i] += u0->values[i];
+            check_inside_tank(started, settings_, " where it starts (reference plus INIT's interface_state displacement)");
+        }
         // Water is cleared from the structure where it stood at the start, and from within dp/2 of its faces (at
         // least dp from its solid particles, which sit dp/2 inside): a lattice laid against a face keeps its first
         // row at exactly dp/2, but a structure that starts deflected into the water would otherwise meet particles

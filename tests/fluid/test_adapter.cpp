@@ -489,6 +489,14 @@ TEST_SUITE("adapter") {
             r.config.as_table_mut()["water"] = Value(Value::Array{block(0.0, 0.0, 0.4, 0.1)});
             CHECK(init_verdict(r).rfind("bad_config: fluid.gate", 0) == 0);
         }
+        {  // A start 5 m above the tank: the reference mesh was checked, not where the structure starts (a review).
+            sphfsi::protocol::InitRequest r = req;
+            F64Array lifted = F64Array::zeros(r.interface->vertices.rows(), 2);
+            for (std::size_t v = 0; v < lifted.rows(); ++v) lifted(v, 1) = 5.0;
+            r.interface_state = Fields{{"displacement", lifted}};
+            CHECK(init_verdict(r).find("m where it starts (reference plus INIT's interface_state displacement), outside the tank") !=
+                  std::string::npos);
+        }
         {  // A mesh with no cells: READY with no solid particle, and every window's force zero (a review, 2026-11-27).
             sphfsi::protocol::InitRequest r = req;
             r.interface->cells = I32Array::zeros(0, 4);
