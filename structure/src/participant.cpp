@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 
 #include "sphfsi/structure/checkpoint.hpp"
@@ -125,7 +126,9 @@ AdvanceReply StructureSolver::advance(const AdvanceRequest& request, Progress& p
         // Moment arms of the vertex forces follow the cross-sections: taken at each sub-step's start.
         const Vector extra = force ? interface_->lump(*force, d.state().u, depth) : Vector();
         const StepReport r = d.step(h, extra);
-        reply.solver_iterations += static_cast<std::uint32_t>(r.iterations);
+        // Saturates: billions of sub-steps times Newton iterations would wrap the protocol's uint32 (a review).
+        reply.solver_iterations = static_cast<std::uint32_t>(
+            std::min<std::uint64_t>(std::uint64_t{reply.solver_iterations} + static_cast<std::uint64_t>(r.iterations), UINT32_MAX));
         max_iterations = std::max(max_iterations, r.iterations);
         max_residual = std::max(max_residual, r.residual);
         progress.tick();
