@@ -101,11 +101,17 @@ Simulation2D::Energy Simulation2D::mechanical_energy() const {
 std::size_t Simulation2D::memory_bytes() const {
     return st_.P.memory_bytes() + (has_saved_ ? saved_.P.memory_bytes() : 0) + grid_.memory_bytes() +
            order_.capacity() * sizeof(std::uint32_t) + scratch_.capacity() + rho_scratch_.capacity() * sizeof(double) +
-           pci_.memory_bytes() + correction_.capacity() * sizeof(Mat<Dim>);
+           pci_.memory_bytes() + (correction_.capacity() + saved_correction_.capacity()) * sizeof(Mat<Dim>);
 }
 
+// The kept rates were made with the correction matrices L of their evaluation, which the window-start shortcut
+// compares the new L with (refresh_solid_rates): L goes with the state. Without it, after RESTORE the shortcut
+// compared with the last iterate's L, so a repeated iterate did not repeat, and after a resume L was empty and
+// the first window read past it (SIGSEGV); evaluating afresh instead changed resumed runs, the shortcut being
+// no full evaluation for a fluid alone or velocity Verlet (reviews, 2026-11-27).
 void Simulation2D::save() {
     saved_ = st_;
+    saved_correction_ = correction_;
     has_saved_ = true;
 }
 
@@ -114,7 +120,8 @@ void Simulation2D::restore() {
     st_ = saved_;
     stepping_ = false;  // a step that failed part-way left its marks; the saved state is between steps
     density_dt_at_evaluation_ = 0.0;
-    forget_rates_without_their_correction();
+    correction_ = saved_correction_;
+    rates_.correction = correction_.data();
     sort_particles();  // the grid belongs to the state it was built for; the saved particles are already in cell order
 }
 
@@ -138,9 +145,10 @@ void Simulation2D::write_state(ByteWriter& w) const {
     w.put_vector(solid_acc_);
     w.put_vector(st_.solid_force_sum);
     w.put(st_.solid_weight);
+    w.put_vector(correction_);  // empty without the pressure correction
 }
 
-void Simulation2D::read_state(ByteReader& r) {
+void Simulation2D::read_state(ByteReader& r, bool with_correction) {
     auto& P = st_.P;
     if (r.get<std::uint64_t>() != checkpoint_magic) throw SolverError("bad_config", "checkpoint: not a sphfsi-fluid state");
     const auto n = r.get<std::uint64_t>(), nf = r.get<std::uint64_t>(), ns = r.get<std::uint64_t>();
@@ -166,17 +174,20 @@ void Simulation2D::read_state(ByteReader& r) {
     r.get_vector(st_.solid_force_sum);
     st_.solid_weight = r.get<double>();
     check_restored_state(st_, n, n_fluid_, n_solid_, solid_acc_);
+    correction_.clear();
+    if (with_correction) r.get_vector(correction_);
+    // Kept rates need their L: one per particle, or none when the pressure correction is off.
+    const std::size_t wanted = s_.kernel_correction && st_.rates_fresh ? n : 0;
+    if (with_correction && correction_.size() != wanted)
+        refuse("it holds " + std::to_string(correction_.size()) + " correction matrices where " + std::to_string(wanted) +
+               " belong (the pressure correction is " + (s_.kernel_correction ? "on" : "off") + ")");
+    for (const auto& L : correction_)
+        for (double x : L)
+            if (!std::isfinite(x)) refuse("a correction matrix holds a value that is not a finite number");
+    // An older (SPHFSIP2) state has no L: its rates are evaluated afresh, the most a resume of it can do.
+    if (!with_correction && s_.kernel_correction) st_.rates_fresh = false;
+    rates_.correction = correction_.data();
     sort_particles();  // rebuild the grid for the restored positions (already in cell order: no reordering)
-    forget_rates_without_their_correction();
-}
-
-// The kept rates were made with the correction matrices L of their evaluation, which the state does not hold
-// (correction_ is scratch): after RESTORE they are the last iterate's, after a resume there are none, and the
-// window-start shortcut read them (a resumed coupled run crashed reading an empty L; a repeated iterate did
-// not repeat, a review, 2026-11-27). The next step then evaluates everything, which the shortcut equals bit
-// for bit (tests/fluid/test_adapter.cpp).
-void Simulation2D::forget_rates_without_their_correction() {
-    if (s_.kernel_correction) st_.rates_fresh = false;
 }
 
 }  // namespace sphfsi::fluid

@@ -18,7 +18,8 @@ namespace {
 // 2026-11-26 opened with the simulation state itself ("SPHFSIF1") and lack the start displacement: refused as
 // written by an older build. Those of the builds of 2026-11-26/27 between commits 1244f65 and d6467fe opened
 // with the displacement's length and are refused as not a sphfsi-fluid checkpoint.
-constexpr std::uint64_t checkpoint_magic = 0x3250495346485053ULL;         // "SPHFSIP2"
+constexpr std::uint64_t checkpoint_magic = 0x3350495346485053ULL;         // "SPHFSIP3": with the correction L
+constexpr std::uint64_t checkpoint_magic_p2 = 0x3250495346485053ULL;      // "SPHFSIP2": without it, still read
 constexpr std::uint64_t older_checkpoint_magic = 0x3146495346485053ULL;   // "SPHFSIF1"
 
 using protocol::F64Array;
@@ -157,7 +158,9 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
                 throw SolverError("bad_config", "checkpoint: written by an older build of sphfsi-fluid (format SPHFSIF1, "
                                                 "before the start displacement was saved); this build cannot resume it: "
                                                 "start the run afresh, or resume with the build that wrote it");
-            if (magic != checkpoint_magic) throw SolverError("bad_config", "checkpoint: not a sphfsi-fluid checkpoint");
+            if (magic != checkpoint_magic && magic != checkpoint_magic_p2)
+                throw SolverError("bad_config", "checkpoint: not a sphfsi-fluid checkpoint");
+            state_has_correction_ = magic == checkpoint_magic;
             saved->get_vector(start_displacement_);
         } catch (const SolverError&) {
             throw;
@@ -193,7 +196,8 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
         coupling->end_window();
         // Where the structure starts, too: a deflected start (INIT's interface_state) 5 m above a 0.4 m tank was
         // accepted (a review, 2026-11-27).
-        if (u0 && u0->values.size() == 2 * request.interface->vertices.rows()) {
+        // A fresh start only: a resume's interface_state is where the run had got to, which no window checks.
+        if (u0 && request.state.empty() && u0->values.size() == 2 * request.interface->vertices.rows()) {
             protocol::InterfaceMesh started = *request.interface;
             for (std::size_t i = 0; i < started.vertices.values.size(); ++i) started.vertices.values[i] += u0->values[i];
             check_inside_tank(started, settings_, " where it starts (reference plus INIT's interface_state displacement)");
@@ -253,7 +257,7 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
     if (saved) {
         try {
             ByteReader& r = *saved;
-            sim_->read_state(r);
+            sim_->read_state(r, state_has_correction_);
             const auto coupling_flag = r.get<std::uint8_t>();
             if (coupling_flag > 1)
                 throw SolverError("bad_config", "checkpoint: its interface flag is " + std::to_string(coupling_flag) + ", not 0 or 1");

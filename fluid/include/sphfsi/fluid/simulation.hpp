@@ -109,7 +109,9 @@ public:
     void save();
     void restore();
     void write_state(ByteWriter& w) const;
-    void read_state(ByteReader& r);
+    // `with_correction`: the state carries the correction matrices L its kept rates were made with (checkpoint
+    // format SPHFSIP3); a SPHFSIP2 state does not, and its rates are then evaluated afresh.
+    void read_state(ByteReader& r, bool with_correction = true);
 
 private:
     struct State {
@@ -125,7 +127,6 @@ private:
 
     void evaluate();
     void refresh_solid_rates();
-    void forget_rates_without_their_correction();  // after the state was replaced (RESTORE, resume)
     const RateFactors* fill_rate_factors();  // into scratch_, for compute_rates
     // The pressure term's correction matrices for the positions now held (pressure.kernel_correction only).
     template <class KernelG>
@@ -234,6 +235,7 @@ private:
     // particle instead of one per pair).
     std::vector<double> rho_scratch_;
     std::vector<Mat<Dim>> correction_;  // per particle L of the pressure correction, recomputed each evaluation
+    std::vector<Mat<Dim>> saved_correction_;  // the L of the saved state's kept rates (save / restore)
     std::vector<Mat<Dim>> correction_kept_;  // scratch of refresh_solid_rates: the L the last evaluation used
     PcisphScratch<Dim> pci_;
     std::unique_ptr<std::ofstream> step_log_;

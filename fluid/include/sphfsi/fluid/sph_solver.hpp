@@ -38,6 +38,7 @@ private:
     // The interface displacement (n x 2, row-major) the run started from; empty: undeformed. Checkpointed, so
     // a resume clears the water around the structure where the first start did.
     std::vector<double> start_displacement_;
+    bool state_has_correction_ = true;  // the checkpoint being read is SPHFSIP3, which holds the correction L
     // A step below the floor found at a window's end, raised by the next ADVANCE (next_step_wanted).
     std::optional<protocol::SolverError> step_floor_failure_;
 };
