@@ -176,11 +176,12 @@ void Simulation2D::read_state(ByteReader& r, bool with_correction) {
     check_restored_state(st_, n, n_fluid_, n_solid_, solid_acc_);
     correction_.clear();
     if (with_correction) r.get_vector(correction_);
-    // Kept rates need their L: one per particle, or none when the pressure correction is off.
-    const std::size_t wanted = s_.kernel_correction && st_.rates_fresh ? n : 0;
-    if (with_correction && correction_.size() != wanted)
-        refuse("it holds " + std::to_string(correction_.size()) + " correction matrices where " + std::to_string(wanted) +
-               " belong (the pressure correction is " + (s_.kernel_correction ? "on" : "off") + ")");
+    // Kept rates need their L, one per particle; without the pressure correction there is none.
+    const bool fits = s_.kernel_correction ? correction_.size() == n || (!st_.rates_fresh && correction_.empty())
+                                           : correction_.empty();
+    if (with_correction && !fits)
+        refuse("it holds " + std::to_string(correction_.size()) + " correction matrices for " + std::to_string(n) +
+               " particles (the pressure correction is " + (s_.kernel_correction ? "on" : "off") + ")");
     for (const auto& L : correction_)
         for (double x : L)
             if (!std::isfinite(x)) refuse("a correction matrix holds a value that is not a finite number");
