@@ -424,16 +424,6 @@ WindowPlan Runner::plan_window(double t_stop) const {
     return p;
 }
 
-// Windows land exactly on frame times (frame k at k * output_interval; frame 0 is the initial state), on
-// checkpoint times (checkpoint k at k * checkpoint_interval) and on the end, never past it. Two of these closer
-// than a sliver are taken as one, or the gap between them would be a window of its own, down to 1e-11 s
-// (whose fluid force had been 25 times its neighbours'): a frame due a sliver before the end is taken at the end,
-// and a checkpoint due within a sliver of a frame, or of the end, is taken with that frame, or not at all (a
-// resume needs none at the end). Frames keep their times. A sliver is a quarter of the window the coupling
-// rule wants, or of the participant's own step when it runs alone (its window is then the whole gap, except a
-// structure's under a load that changes in time: structure_alone_step), or of the output or checkpoint
-// interval where that is shorter: windows are no longer than those anyway, and a larger
-// sliver would fold several frames due before the end into the end's one.
 // A structure run alone under a load that changes in time steps once per window, at its own step or, for a
 // sine, at most 1/20 of a period: sampled once per structure step, a frequency above half the step rate
 // folded back onto a lower one (a review ran 1/dt - 100 Hz, and it moved the beam as 100 Hz did, to
@@ -446,6 +436,16 @@ double Runner::structure_alone_step() const {
     return structure_dt_;
 }
 
+// Windows land exactly on frame times (frame k at k * output_interval; frame 0 is the initial state), on
+// checkpoint times (checkpoint k at k * checkpoint_interval) and on the end, never past it. Two of these closer
+// than a sliver are taken as one, or the gap between them would be a window of its own, down to 1e-11 s
+// (whose fluid force had been 25 times its neighbours'): a frame due a sliver before the end is taken at the end,
+// and a checkpoint due within a sliver of a frame, or of the end, is taken with that frame, or not at all (a
+// resume needs none at the end). Frames keep their times. A sliver is a quarter of the window the coupling
+// rule wants, or of the participant's own step when it runs alone (its window is then the whole gap, except a
+// structure's under a load that changes in time: structure_alone_step), or of the output or checkpoint
+// interval where that is shorter: windows are no longer than those anyway, and a larger
+// sliver would fold several frames due before the end into the end's one.
 Runner::Stop Runner::next_stop() const {
     const double frame_due = std::min(output_index_ * output_dt_, end_);
     const double checkpoint_due = (checkpoint_index_ + 1) * checkpoint_dt_;
