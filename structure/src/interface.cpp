@@ -74,9 +74,12 @@ Vector InterfaceMap::lump(const F64Array& forces, const Vector& u, double factor
     Vector f = Vector::Zero(model_->dof_count());
     for (std::size_t i = 0; i < vertices_.size(); ++i) {
         const Vec2 force(forces(i, 0) * factor, forces(i, 1) * factor);
+        // An input the structure cannot take, refused before the first sub-step uses it (docs/protocol.md,
+        // ADVANCE: bad_message); "diverged" is for a solution that blew up.
         if (!std::isfinite(force.x()) || !std::isfinite(force.y()))
-            throw SolverError("diverged", "structure: input force on interface vertex " + std::to_string(i) +
-                                              " (node " + std::to_string(vertices_[i].node) + ") is not finite");
+            throw SolverError("bad_message", "structure: inputs[\"force\"] on interface vertex " + std::to_string(i) + " (node " +
+                                                 std::to_string(vertices_[i].node) + ") is not a finite number, times the "
+                                                 "section depth where it is");
         const int n = vertices_[i].node;
         const Vec2 r = arm(vertices_[i], u);
         f[3 * n] += force.x();

@@ -111,13 +111,6 @@ AdvanceReply StructureSolver::advance(const AdvanceRequest& request, Progress& p
         if (!force) throw SolverError("bad_message", "structure: inputs[\"force\"] must be an f8 array");
     }
     const double depth = d.config().section.depth;
-    // An input that is not a finite number is refused before any step (docs/protocol.md, ADVANCE), as the
-    // protocol's code for it says; "diverged" is for a solution that blew up.
-    if (force)
-        for (std::size_t i = 0; i < force->values.size(); ++i)
-            if (!std::isfinite(force->values[i] * depth))
-                throw SolverError("bad_message", "structure: inputs[\"force\"] row " + std::to_string(i / 2) + " holds " +
-                                                     std::to_string(force->values[i]) + (std::isfinite(force->values[i]) ? " N/m, which times the section depth is not finite" : ", not a finite number"));
 
     AdvanceReply reply;
     int max_iterations = 0;

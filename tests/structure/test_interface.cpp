@@ -146,9 +146,9 @@ TEST_CASE("lumping refuses wrong shapes and non-finite forces") {
     f(5, 1) = std::nan("");
     try {
         map.lump(f, u, 1.0);
-        FAIL("expected diverged");
+        FAIL("expected bad_message");
     } catch (const sphfsi::protocol::SolverError& e) {
-        CHECK(e.code() == "diverged");
+        CHECK(e.code() == "bad_message");  // an input refused, as docs/protocol.md's ADVANCE says
         CHECK(std::string(e.what()).find("vertex 5") != std::string::npos);
     }
 }
