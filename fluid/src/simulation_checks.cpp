@@ -14,13 +14,17 @@ namespace sphfsi::fluid {
 
 using protocol::SolverError;
 
+std::string Simulation2D::particle_named(std::size_t i) const {
+    const V& x = st_.P.x[i];
+    return "particle " + std::to_string(st_.P.id[i]) + " at (" + fmt(x[0]) + ", " + fmt(x[1]) + ") m";
+}
+
 // Every failure names the particle the same way, by its id and (while it has one) its position, so that a
 // density, a speed or a wall crossing can each be found in the last frame.
 void Simulation2D::fail(std::size_t i, const std::string& quantity, double value, const std::string& why) const {
-    const V& x = st_.P.x[i];
-    const std::string where = all_finite(x) ? " at (" + fmt(x[0]) + ", " + fmt(x[1]) + ") m" : std::string();
-    throw SolverError("diverged", "step " + std::to_string(st_.step + (stepping_ ? 1 : 0)) + ", t = " + fmt(st_.t) + " s: particle " +
-                                      std::to_string(st_.P.id[i]) + where + ": " + quantity + " = " + fmt(value) + " (" + why + ")");
+    const std::string who = all_finite(st_.P.x[i]) ? particle_named(i) : "particle " + std::to_string(st_.P.id[i]);
+    throw SolverError("diverged", "step " + std::to_string(st_.step + (stepping_ ? 1 : 0)) + ", t = " + fmt(st_.t) + " s: " + who +
+                                      ": " + quantity + " = " + fmt(value) + " (" + why + ")");
 }
 
 // Over the top of a side wall of an open tank and out beyond its outer face: the particle has left the tank
@@ -224,7 +228,7 @@ Simulation2D::Crossing Simulation2D::wall_crossings() const {
                                 : where == Beyond::Lid       ? "above the lid surface"
                                 : where == Beyond::Obstacle  ? "inside an obstacle"
                                                              : "inside " + section_.name();
-        c.first = "particle " + std::to_string(P.id[i]) + " at (" + fmt(P.x[i][0]) + ", " + fmt(P.x[i][1]) + ") m: " + why;
+        c.first = particle_named(i) + ": " + why;
     }
     return c;
 }

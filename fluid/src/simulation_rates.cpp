@@ -355,8 +355,7 @@ double Simulation2D::stable_dt() {
         // PCISPH's |a| may be the last step's with its pressure, which P.a (the non-pressure part) cannot name.
         const bool pressure_from_last = s_.pressure == PressureModel::Pcisph && st_.a_max_last > st_.a_max;
         auto who = [&](std::size_t i) {
-            return i == P.size() ? std::string()
-                                 : " (particle " + std::to_string(P.id[i]) + " at (" + fmt(P.x[i][0]) + ", " + fmt(P.x[i][1]) + ") m)";
+            return i == P.size() ? std::string() : " (" + particle_named(i) + ")";
         };
         throw SolverError("diverged", "step " + std::to_string(st_.step + 1) + ", t = " + fmt(st_.t) +
                                           " s: time step = " + fmt(ss.dt) + " s (below the floor dt_min = " +

@@ -189,6 +189,8 @@ private:
     bool through_obstacle(const Box& b, const V& x) const;  // lost into a static obstacle
     bool across_obstacle_middle(const Box& b, const V& from, const V& to) const;  // lost across a thin one
     [[noreturn]] void fail(std::size_t i, const std::string& quantity, double value, const std::string& why) const;
+    // "particle ID at (x, y) m": how every message names particle i (its id survives the reordering).
+    std::string particle_named(std::size_t i) const;
     // Inside a step once its integrator has moved the time on, the state belongs to the step not yet counted.
     bool stepping_ = false;
     V boundary_acceleration(std::uint32_t w) const;
