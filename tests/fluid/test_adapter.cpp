@@ -93,10 +93,9 @@ std::string resume_verdict(const Value& config, std::vector<std::uint8_t> state,
     return init_verdict(req);
 }
 
-// plate()'s window-end inputs after rising from rest at the constant acceleration that reaches vertical
-// velocity vy at the end of a window `window` long.
-Fields rising_plate(double vy, double window) {
-    const std::size_t nv = plate().vertices.rows();
+// The window-end inputs of a mesh of nv vertices (plate()'s by default) after rising from rest at the constant
+// acceleration that reaches vertical velocity vy at the end of a window `window` long.
+Fields rising_plate(double vy, double window, std::size_t nv = plate().vertices.rows()) {
     F64Array disp = F64Array::zeros(nv, 2), vel = F64Array::zeros(nv, 2);
     for (std::size_t v = 0; v < nv; ++v) {
         disp(v, 1) = 0.5 * vy * window;
@@ -692,15 +691,8 @@ TEST_SUITE("adapter") {
                           {{"pressure.kernel_correction", true}, {"pressure.clamp_negative", false}, {"threads", 1},
                            {"time.integrator", integrator}});
         req.interface = plate_at(0.35, 0.5, 0.3, 0.36, 3, 1);
-        const std::size_t nv = 8;
-        auto moving = [&](double vy, double window) {
-            F64Array disp = F64Array::zeros(nv, 2), vel = F64Array::zeros(nv, 2);
-            for (std::size_t v = 0; v < nv; ++v) {
-                disp(v, 1) = 0.5 * vy * window;
-                vel(v, 1) = vy;
-            }
-            return Fields{{"displacement", disp}, {"velocity", vel}};
-        };
+        const std::size_t nv = req.interface->vertices.rows();
+        auto moving = [&](double vy, double window) { return rising_plate(vy, window, nv); };
         double window = s.init(req).dt_wanted;
         while (s.simulation().time() < 0.25) window = step(s, 3 * window, 3, moving(0.0, 3 * window)).dt_wanted;  // the surge nears the plate
         std::size_t differed = 0;
