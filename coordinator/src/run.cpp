@@ -250,19 +250,35 @@ int Runner::execute() {
         recorder_->set_number("interface_work", iface_.work_total);
         recorder_->set_number("interface_energy_created", iface_.created_total);
     }
+    if (watchpoints_) watchpoints_->flush();
+    if (code == 0) {
+        // A completed resume replaces the interrupted files whatever time they reached, before its status is
+        // set: the status and the sidecar written with it are then the final record's. The sidecar was written
+        // only here, after the status, and a failure to write it escaped as an exception with "completed" on
+        // file (a review, 2026-11-27). A resume that cannot take over has not completed.
+        try {
+            take_over_when_caught_up(std::numeric_limits<double>::infinity());
+        } catch (const std::exception& e) {
+            log(std::string("error: ") + e.what());
+            status = std::string("failed: ") + e.what();
+            code = 1;
+        }
+    }
     if (const std::string written = recorder_->set_status(status); written != status) {  // after every row and total above
         log("error: " + written.substr(std::string("failed: ").size()));
         status = written;
         code = 1;
     }
-    if (watchpoints_) watchpoints_->flush();
-    if (code == 0) {  // a completed resume replaces the interrupted files whatever time they reached
-        take_over_when_caught_up(std::numeric_limits<double>::infinity());
-    } else {
+    if (code != 0) {
         // A resume that reached the interrupted record's end holds all of it and then this stop: its copy
         // replaces the files, as it would have at the end of the window it stopped in (the loop takes over
-        // after the window's frames, which can fail).
-        take_over_when_caught_up(t_);
+        // after the window's frames, which can fail). The status already says why the run stopped; a take-over
+        // that fails as well is logged, and the rest of the clean-up still runs.
+        try {
+            take_over_when_caught_up(t_);
+        } catch (const std::exception& e) {
+            log(std::string("error: ") + e.what());
+        }
         if (recorder_->resume_pending()) {
             log("the resumed run stopped at t = " + std::to_string(t_) + " s, before t = " +
                 std::to_string(recorder_->history_end()) + " s, where the interrupted run's record ends: " +

@@ -216,6 +216,34 @@ def test_a_resume_that_stops_before_catching_up_leaves_the_record_as_it_was():
         assert f.attrs["status"] == "completed" and f["frames/structure/time"].shape[0] == 21
 
 
+def test_a_completed_resume_whose_sidecar_cannot_be_written_says_so_in_its_status():
+    """A resume writes the XDMF sidecar only once its copy has replaced record.h5 (until then the sidecar
+    describes the interrupted record). A copy that takes over only when the run completes (the interrupted
+    record reaches past where the resumed run ends; here its last window row is edited to 0.06 s of a 0.05 s
+    run) wrote it after the status "completed" was set, and a failure escaped as an exception with
+    "completed" on file and nothing in run.log (a review, 2026-11-27; seen so). Now the copy takes over before
+    the status is set, and a sidecar that cannot be written (a directory stands where its temporary file
+    goes) makes the status "failed: ..." with the history whole."""
+    out = harness.out_dir("resume-sidecar")
+    scene = os.path.join(harness.ROOT, "scenarios", "fluid_only.toml")
+    harness.sphfsi("run", scene, "--out", out, "--quiet", "--set", "run.end_time=0.05", "--set",
+                   "run.checkpoint_interval=0.02", "--set", "run.output_interval=0.01", check=0, timeout=60)
+    import h5py
+    with h5py.File(os.path.join(out, "record.h5"), "r+", locking=False) as f:
+        f.attrs["status"] = "running"  # as a run killed at its end, after its last checkpoint, leaves it
+        f["windows/t"][-1] = 0.06
+        frames = f["frames/fluid/time"].shape[0]
+    os.makedirs(os.path.join(out, "record.xdmf.tmp"))
+    code, text = harness.sphfsi("run", "--resume", out, "--quiet", timeout=60)
+    assert code == 1 and "cannot write the XDMF sidecar" in text, (code, text)
+    with open(os.path.join(out, "run.log")) as f:
+        assert "error: cannot write the XDMF sidecar" in f.read()
+    assert not [n for n in os.listdir(out) if n.endswith(".resuming")], os.listdir(out)
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert f.attrs["status"].startswith("failed: cannot write the XDMF sidecar"), f.attrs["status"]
+        assert "resumed_by" in f.attrs and f["frames/fluid/time"].shape[0] == frames
+
+
 def killed_at_a_rename(args, to, count, when, timeout=60):
     """Runs sphfsi with kill_at_write.so, which SIGKILLs it just `when` ("before" or "after") its `count`-th
     rename onto a path ending in `to`."""
