@@ -38,7 +38,11 @@ section picks the fault:
   mode = "wrong_token"    answers the first ADVANCE with a wrong token, then prints the reply's type and version
   mode = "heartbeat_own_socket"  sends its heartbeats on a second socket and takes 3 s over the first ADVANCE
   mode = "stall"          never answers the first ADVANCE while its heartbeats go on, progress standing still
-Otherwise it answers like a structure that does not move.
+  mode = "overflow"       as a structure, moves vertex 0 by +1e308 m in x at iteration 0 and -1e308 m at later ones:
+                          finite answers whose implicit iterate overflows
+Otherwise it answers like a structure that does not move. Started with --name fluid it is a fluid instead (it
+says so at HELLO and answers with a zero force), so that a coupled scene can run two of it; it acknowledges
+SAVE and RESTORE, which implicit coupling asks for.
 """
 import os
 import struct
@@ -75,7 +79,7 @@ def main():
     # The mode arrives only with INIT; a version fault must show at HELLO, so it may also come from the env.
     mode = os.environ.get("MISBEHAVE", "")
     version = 99 if mode == "version" else 1
-    kind_said = "fluid" if mode in ("wrong_kind", "fluid_v1") else "structure"
+    kind_said = "fluid" if mode in ("wrong_kind", "fluid_v1") or args.get("--name") == "fluid" else "structure"
     send("HELLO", 1, {"name": args.get("--name", "structure"), "kind": kind_said, "version_min": version,
                       "version_max": version, "software": "misbehaving.py", "pid": os.getpid()}, v=version)
     reply = recv()
@@ -157,10 +161,15 @@ def main():
             else:
                 now = body["t"] + body["dt"]
                 zero = f8(4, [0.0] * 8)
+                moved = [0.0] * 8
+                if mode == "overflow":
+                    moved[0] = 1e308 if body.get("iteration", 0) == 0 else -1e308
+                outputs = ({"force": zero} if kind_said == "fluid" and mode not in ("wrong_kind", "fluid_v1")
+                           else {"displacement": f8(4, moved), "velocity": zero})
                 send("ADVANCED", seq + 7 if mode == "wrong_seq" else seq,
                      {"t": now + 1.0 if mode == "wrong_time" else now, "dt_wanted": 0.01,
-                      "outputs": {"displacement": zero, "velocity": zero},
-                      "substeps": 1, "solver_iterations": 0, "compute_s": 0.0,
+                      "outputs": outputs,
+                      "substeps": body.get("substeps") or 1, "solver_iterations": 0, "compute_s": 0.0,
                       "stats": {"x": "text"} if mode == "stats_text" else {"a/b": 1.0} if mode == "stats_bad_name"
                       else {"kinetic_energy": float("nan")} if mode == "stats_nan"
                       else {f"s{i}": 1.0 for i in range(300)} if mode == "stats_many"
@@ -175,6 +184,8 @@ def main():
                       "frame_changes": {"y": one, **({"zz": one} if now > 0 else {})},
                       "frame_empty": {"z": {"dtype": "f8", "shape": [0, 4294967296], "data": b""}}}.get(mode, {})
             send("FRAME", seq, {"t": now, "fields": fields})
+        elif kind in ("SAVE", "RESTORE"):
+            send("ACK", seq, {})
         elif kind == "CHECKPOINT":
             send("STATE", seq, {"t": now, "state": b"" if mode == "empty_state" else struct.pack("<d", now)})
         elif kind == "BYE":

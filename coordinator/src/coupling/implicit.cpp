@@ -71,8 +71,19 @@ public:
             o.residual = (xt.head(nd) - x.head(nd)).norm();
             o.iterations = static_cast<std::uint32_t>(k + 1);
             double bound = tol_rel_ * xt.head(nd).norm() + tol_abs_ * std::sqrt(static_cast<double>(n));
-            o.converged = o.residual <= bound;
-            if (o.converged || k + 1 >= max_iter_) {
+            // A residual that overflowed is no convergence, though the bound overflows with it (inf <= inf): a
+            // structure answering 1e308 m was accepted at once (2026-11-28).
+            o.converged = std::isfinite(o.residual) && o.residual <= bound;
+            Vec next;
+            if (!o.converged && k + 1 < max_iter_) {
+                next = acc_->next(x, xt, nd);
+                // Aitken's factor is unbounded and a least-squares solve can be ill-conditioned: an iterate that
+                // is not finite is the coupling's failure, named here, not the fluid's bad input. The window
+                // ends on the last evaluated iterate, as at the iteration cap, so that it is recorded before the
+                // run stops (it was thrown past the record before 2026-11-28).
+                if (!next.allFinite()) o.stop_run = non_finite_iterate(next, nd, p, k + 1, o.residual);
+            }
+            if (o.converged || k + 1 >= max_iter_ || !o.stop_run.empty()) {
                 s.force = f;
                 o.structure_force = f;
                 s.fluid_displacement = to_array(x.head(nd), d);
@@ -82,15 +93,7 @@ public:
                 s.velocity = v_new;
                 break;
             }
-            x = acc_->next(x, xt, nd);
-            // Aitken's factor is unbounded and a least-squares solve can be ill-conditioned: an iterate that is
-            // not finite is the coupling's failure, named here, not the fluid's bad input.
-            if (!x.allFinite()) {
-                std::ostringstream msg;
-                msg << "coupling diverged: the " << scheme_ << " iterate of window t = " << p.t << " .. " << p.t + p.dt
-                    << " s is not finite after " << k + 1 << " iterations (residual " << o.residual << " m)";
-                throw std::runtime_error(msg.str());
-            }
+            x = std::move(next);
         }
         acc_->end_window(o.converged);
         o.fluid.reply.substeps = fluid_substeps;
@@ -101,7 +104,7 @@ public:
         o.structure.reply.compute_s = structure_compute;
         o.fluid.roundtrip_s = fluid_trip;
         o.structure.roundtrip_s = structure_trip;
-        if (!o.converged) {
+        if (!o.converged && o.stop_run.empty()) {
             std::ostringstream msg;
             msg << "coupling did not converge in window t = " << p.t << " .. " << p.t + p.dt << " s after " << o.iterations
                 << " iterations (residual " << o.residual << " m; coupling.max_iterations)";
@@ -114,6 +117,21 @@ public:
     }
 
 private:
+    // Names the first entry of a proposed iterate (displacements, then velocities) that is not finite.
+    std::string non_finite_iterate(const Vec& next, Eigen::Index nd, const WindowPlan& p, int iterations,
+                                   double residual) const {
+        Eigen::Index j = 0;
+        while (j < next.size() && std::isfinite(next[j])) ++j;
+        const bool velocity = j >= nd;
+        const Eigen::Index k = velocity ? j - nd : j;
+        std::ostringstream msg;
+        msg << "coupling diverged: the " << scheme_ << " iterate of window t = " << p.t << " .. " << p.t + p.dt
+            << " s is not finite after " << iterations << " iterations (residual " << residual << " m): its "
+            << (velocity ? "velocity" : "displacement") << ' ' << (k % 2 == 0 ? 'x' : 'y') << " at interface vertex "
+            << k / 2 << " is " << next[j];
+        return msg.str();
+    }
+
     Session& session_;
     Log log_;
     std::unique_ptr<Accelerator> acc_;
