@@ -13,7 +13,7 @@ def test_scene_reference_matches_the_code():
     with open(update_scene_docs.DOC) as f:
         _, body, _ = update_scene_docs.split(f.read())
     want = update_scene_docs.generated(os.path.join(harness.BIN, "sphfsi"))
-    assert body.strip() == want.strip(), "docs/scenes.md is stale: run tools/update_scene_docs.py build/bin/sphfsi"
+    assert body.strip() == want.strip(), "docs/scenes.md is stale: run /usr/bin/python3 tools/update_scene_docs.py build/bin/sphfsi"
 
 
 if __name__ == "__main__":
