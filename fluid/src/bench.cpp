@@ -10,7 +10,11 @@
 //
 // The default (--sizes 10k, 100 steps) takes a few seconds. Each run first takes 20 warm-up steps (the
 // column starts to fall), then times --steps adaptive steps. Particles counted: all (fluid + wall), as
-// DualSPHysics reports them.
+// DualSPHysics reports them. "threads" is the count the simulation uses (one below 4,000 particles; 0 asks
+// for every core). "bytes/part" is the solver's own count of its arrays per particle; "peak_rss/part" the
+// whole process's peak resident set (VmHWM: code and runtime included, so it falls with size) over the
+// particles, and "peak_rss_kB" that peak itself. The peak is reset before each setup, so several setups in
+// one process each print their own; where the kernel refuses the reset, setups after the first print n/a.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -20,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include <malloc.h>
 #include <omp.h>
 
 #include "sphfsi/fluid/openmp_environment.hpp"
@@ -79,6 +84,17 @@ double peak_resident_bytes() {
     return 0.0;
 }
 
+// Starts a new peak: VmHWM is the process's life-time peak, so without this every setup after the first
+// would print the largest earlier one's. Writing "5" to clear_refs sets it to the current resident set
+// (Linux >= 4.0); the freed memory the allocator still holds from the setup before is handed back first,
+// or it would count in this one's peak. False where the write is refused.
+bool reset_peak_resident() {
+    malloc_trim(0);
+    std::ofstream clear("/proc/self/clear_refs");
+    clear << "5" << std::flush;
+    return static_cast<bool>(clear);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -97,13 +113,17 @@ int main(int argc, char** argv) {
             return help ? 0 : 2;
         }
     }
-    std::printf("%-9s %7s %9s %9s %7s %7s %9s %14s %10s %10s\n", "model", "threads", "fluid", "particles", "steps", "iters",
-                "wall_s", "particle-steps/s", "bytes/part", "peak_rss/part");
+    std::printf("%-9s %7s %9s %9s %7s %7s %9s %14s %10s %10s %10s\n", "model", "threads", "fluid", "particles", "steps",
+                "iters", "wall_s", "particle-steps/s", "bytes/part", "peak_rss/part", "peak_rss_kB");
+    bool first_setup = true, peak_valid = true;
     for (const auto& size : sizes) {
         const double n = std::atof(size.c_str()) * (size.back() == 'k' ? 1e3 : size.back() == 'M' ? 1e6 : 1.0);
         const double dp = fluid_count_to_dp(n);
         for (const auto& model : models)
             for (const auto& th : threads) {
+                // The first setup's peak is valid without a reset: nothing before it but start-up.
+                peak_valid = reset_peak_resident() || (first_setup && peak_valid);
+                first_setup = false;
                 sphfsi::fluid::SphSolver solver;
                 sphfsi::protocol::InitRequest init;
                 init.config = scene(dp, model, std::atoi(th.c_str()));
@@ -129,9 +149,15 @@ int main(int argc, char** argv) {
                 const int taken = advance_steps(steps, iters);
                 const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
                 const double np = static_cast<double>(sim.particles().size());
-                std::printf("%-9s %7s %9zu %9zu %7d %7u %9.3f %14.3e %10.0f %10.0f\n", model.c_str(), th.c_str(),
+                const double peak = peak_resident_bytes();
+                char per_particle[32] = "n/a", kib[32] = "n/a";
+                if (peak_valid) {
+                    std::snprintf(per_particle, sizeof per_particle, "%.0f", peak / np);
+                    std::snprintf(kib, sizeof kib, "%.0f", peak / 1024.0);
+                }
+                std::printf("%-9s %7d %9zu %9zu %7d %7u %9.3f %14.3e %10.0f %10s %10s\n", model.c_str(), sim.threads(),
                             sim.fluid_count(), sim.particles().size(), taken, iters, wall, np * taken / wall,
-                            static_cast<double>(sim.memory_bytes()) / np, peak_resident_bytes() / np);
+                            static_cast<double>(sim.memory_bytes()) / np, per_particle, kib);
                 std::fflush(stdout);
             }
     }
