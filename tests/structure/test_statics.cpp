@@ -54,6 +54,24 @@ TEST_CASE("cantilever under self-weight: q = rho A g, deflection q L^4 / (8 EI)"
     check_close("tip deflection", dof(f, {L, 0}, 1), -rhoA * 9.81 * L * L * L * L / (8 * EI), 1e-9);
 }
 
+TEST_CASE("inclined cantilever, uniform load in global axes: its axial and normal parts, 4 elements") {
+    // A member at 53.13 degrees (direction (3, 4) / 5) under q = (300, -1000) N/m: the load's part along the
+    // axis stretches it by q_a L^2 / (2 EA), its normal part bends it by q_n L^4 / (8 EI) and turns the tip by
+    // q_n L^3 / (6 EI). Every other statics case loads a horizontal member, where a wrong sign on the sin term
+    // of the load's rotation into member axes would not show (a review, 2026-11-28).
+    const double c = 0.6, sn = 0.8, EA = E * t, qx = 300.0, qy = -1000.0;
+    Value s = beam(4);
+    set(s, "members", Value(Value::Array{table({{"start", vec(0, 0)}, {"end", vec(c * L, sn * L)}, {"n_elements", Value(4)}})}));
+    set(s, "distributed_loads", Value(Value::Array{table({{"member", Value(0)}, {"q", vec(qx, qy)}})}));
+    const auto f = solve(s);
+    const double qa = qx * c + qy * sn, qn = -qx * sn + qy * c;
+    const double ua = qa * L * L / (2 * EA), un = qn * L * L * L * L / (8 * EI);
+    const Point2 tip{c * L, sn * L};
+    check_close("tip x", dof(f, tip, 0), ua * c - un * sn, 1e-9);
+    check_close("tip y", dof(f, tip, 1), ua * sn + un * c, 1e-9);
+    check_close("tip rotation", dof(f, tip, 2), qn * L * L * L / (6 * EI), 1e-9);
+}
+
 TEST_CASE("plane strain uses E / (1 - nu^2)") {
     Value s = beam(10);
     set(s, "section.plane_strain", Value(true));
