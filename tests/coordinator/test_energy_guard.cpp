@@ -69,4 +69,25 @@ TEST_SUITE("energy_guard") {
         CHECK(account_energy(limits, 2, 0.02, window(5.0, 2.0, 0.0), InterfaceWork{}, s).empty());
         CHECK(account_energy(limits, 3, 0.03, window(50.0, 2.0, 0.0), InterfaceWork{}, s).empty());  // no stop
     }
+
+    TEST_CASE("a structure that reports its energies but not external_work leaves the gain unchecked, said once") {
+        // Its own weight may be doing work the balance cannot take out: a foreign structure under gravity that
+        // reported kinetic and strain energy alone was stopped as diverged in its 4th window (2026-11-28).
+        const EnergyLimits limits;
+        auto without_work = [](double fluid, double structure) {
+            WindowOutcome o = window(fluid, structure, 0.0);
+            o.structure.reply.stats = Value(Value::Table{{"kinetic_energy", Value(structure)}, {"strain_energy", Value(0.0)}});
+            return o;
+        };
+        InterfaceState s;
+        const std::string said = account_energy(limits, 1, 0.01, without_work(10.0, 2.0), InterfaceWork{}, s);
+        CHECK(said.find("not external_work") != std::string::npos);
+        CHECK(account_energy(limits, 2, 0.02, without_work(10.0, 40.0), InterfaceWork{}, s).empty());  // no stop
+        CHECK(account_energy(limits, 3, 0.03, without_work(10.0, 80.0), InterfaceWork{}, s).empty());  // said once
+        // With external_work the same gain stops the run.
+        InterfaceState t;
+        account_energy(limits, 1, 0.01, window(10.0, 2.0, 0.0), InterfaceWork{}, t);
+        CHECK_THROWS_WITH_AS(account_energy(limits, 2, 0.02, window(10.0, 40.0, 0.0), InterfaceWork{}, t),
+                             doctest::Contains("coupling diverged: window 2"), std::runtime_error);
+    }
 }

@@ -64,6 +64,9 @@ struct InterfaceState {
     double work_total = 0.0, created_total = 0.0, fluid_energy = 0.0;
     double total_energy = std::numeric_limits<double>::quiet_NaN();
     double previous_dt = 0.0;
+    // Said once that the gain check is off for a structure that reports its energies but not its external
+    // work (not checkpointed: a resumed run says it once more).
+    bool no_external_work_said = false;
     // Kept across windows by IQN-ILS (accelerators.hpp), here so that a checkpoint holds it and a resumed
     // run iterates as the uninterrupted one (until 2026-11-27 it did not, a review).
     SecantHistory secants;
