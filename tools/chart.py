@@ -17,8 +17,10 @@ Log-log axes. Each method: a line through its completed runs sorted by cost, wit
 of log(error) against log(cost) in the legend. Pareto front (over all methods): the runs that no other run
 beats on both cost and error (lower or equal in both, lower in one), ringed and joined by a staircase.
 Runs that did not complete are drawn as crosses along the top edge, at their cost (left edge if they have
-none), each labelled with its status; completed runs without a positive error (the reference run, an
-exact result) as triangles along the bottom edge. Nothing is dropped silently: the legend counts them.
+none), each labelled with its status; so are completed runs without a value (a metric that failed, or an
+infinite or NaN one) and with a negative one (not an error column: a log axis cannot show it); completed
+runs with an error of exactly 0 (an exact result) and the reference run as triangles along the bottom edge.
+Nothing is dropped silently: the title counts them.
 """
 import argparse
 import json
@@ -86,7 +88,9 @@ def axis_label(col, desc):
     if info:
         unit = info.get("unit") or ""
         unit = "-" if unit in ("", "-") else unit
-        return textwrap.fill(f"{col}: {info['meaning']} [{unit}]", 70)
+        # "as the quantity" (value, abs_error of a metric that measures whatever it is given) is no unit to print.
+        unit = "" if unit.startswith("as the ") else f" [{unit}]"
+        return textwrap.fill(f"{col}: {info['meaning']}{unit}", 70)
     return col
 
 
@@ -117,7 +121,7 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
     for col in [x, y] + list(series) + ([annotate] if annotate else []):
         if col not in have:
             raise ChartError(f"no column {col!r}; columns: {', '.join(rows[0])}")
-    groups, failed, no_value, no_error, not_applicable = {}, [], [], [], 0
+    groups, failed, no_value, no_error, negative, not_applicable = {}, [], [], [], [], 0
     metric_label = y.split(".", 1)[0]
     for r in rows:
         label = series_label(r, series)
@@ -135,7 +139,13 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
                 no_error.append((label, cx, r))
             else:
                 not_applicable += 1
-        elif not (cy > 0 and math.isfinite(cy)):
+        elif not math.isfinite(cy):
+            # results.cell writes an infinite value as "inf": no value to draw, not an exact result.
+            no_value.append((label, cx, dict(r, status=f"no value ({r[y].strip()})")))
+        elif cy < 0:
+            # Errors are >= 0; a column that is not one (a signed error) has values a log axis cannot show.
+            negative.append((label, cx, dict(r, status=f"negative ({cy:.3g})")))
+        elif cy == 0:
             no_error.append((label, cx, r))
         else:
             groups.setdefault(label, []).append((cx, cy, r))
@@ -143,7 +153,7 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
     fig, ax = plt.subplots(figsize=(9, 6))
     ax.set_xscale("log")
     ax.set_yscale("log")
-    labels = sorted(set(groups) | {l for l, _, _ in failed + no_value + no_error})
+    labels = sorted(set(groups) | {l for l, _, _ in failed + no_value + negative + no_error})
     colours = {l: f"C{i % 10}" for i, l in enumerate(labels)}
     markers = {l: MARKERS[i % len(MARKERS)] for i, l in enumerate(labels)}
     all_pts = []
@@ -171,7 +181,8 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
                 label=f"Pareto front ({len(front)} of {len(all_pts)} runs)")
 
     # Axis limits from everything that has a cost, so crosses of failed runs fall inside.
-    xs = [p[0] for p in all_pts] + [c for _, c, _ in failed + no_value + no_error if c > 0 and math.isfinite(c)]
+    xs = [p[0] for p in all_pts] + [c for _, c, _ in failed + no_value + negative + no_error
+                                    if c > 0 and math.isfinite(c)]
     ys = [p[1] for p in all_pts]
     if xs:
         lo, hi = min(xs), max(xs)
@@ -186,7 +197,7 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
     def at_x(c):
         return c if c > 0 and math.isfinite(c) else xlo * 1.08
 
-    crosses = failed + no_value
+    crosses = failed + no_value + negative
     if crosses:
         for i, (label, c, r) in enumerate(crosses):
             ax.plot([at_x(c)], [0.965], "x", color=colours.get(label, "r"), ms=10, mew=2.2, transform=edge,
@@ -198,7 +209,7 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
     if no_error:
         for i, (label, c, r) in enumerate(no_error):
             ax.plot([at_x(c)], [0.03], "v", color=colours.get(label, "k"), ms=8, transform=edge, clip_on=False,
-                    zorder=5, label="completed, no positive error (reference / exact)" if i == 0 else None)
+                    zorder=5, label="completed, error 0 (exact) or the reference run" if i == 0 else None)
     ax.set_xlabel(axis_label(x, desc))
     ax.set_ylabel(axis_label(y, desc))
     ttl = title or desc.get("title") or "error against cost"
@@ -206,7 +217,8 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
     no_cost = sum(1 for _, _, r in failed if r.get("status") == "no cost")
     counts = f"{len(all_pts)} plotted, {len(failed) - no_cost} did not complete, " \
              + (f"{no_cost} completed without a {x}, " if no_cost else "") + f"{len(no_value)} no value, " \
-             f"{len(no_error)} without error" + (f", {not_applicable} not applicable" if not_applicable else "")
+             f"{len(no_error)} without error" + (f", {len(negative)} negative" if negative else "") \
+             + (f", {not_applicable} not applicable" if not_applicable else "")
     ax.set_title(f"{ttl}\n{y} against {x} ({counts})", fontsize=10)
     ax.grid(True, which="both", alpha=0.25)
     ax.legend(fontsize=7.5, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
@@ -218,7 +230,8 @@ def make_chart(rows, x, y, series, prefix, title=None, annotate=None, desc=None)
     plt.close(fig)
     return {"plotted": len(all_pts), "series": len([l for l in labels if groups.get(l)]), "failed": len(failed) - no_cost,
             "no_cost": no_cost,
-            "no_value": len(no_value), "no_error": len(no_error), "not_applicable": not_applicable,
+            "no_value": len(no_value), "no_error": len(no_error), "negative": len(negative),
+            "not_applicable": not_applicable,
             "pareto": [(p[2], p[0], p[1], p[3].get("run", "")) for p in front]}
 
 
@@ -259,7 +272,8 @@ def chart_file(csv_path, x, y, series, prefix, title=None, annotate=None, where=
     s = make_chart(rows, x, y, series, prefix, title, annotate, desc)
     return (f"{s['plotted']} runs in {s['series']} series, {s['failed']} did not complete, "
             + (f"{s['no_cost']} completed without a {x}, " if s['no_cost'] else "") + f"{s['no_value']} no value, "
-            f"{s['no_error']} without error, {s['not_applicable']} not applicable, Pareto front {len(s['pareto'])}")
+            f"{s['no_error']} without error, " + (f"{s['negative']} negative, " if s['negative'] else "")
+            + f"{s['not_applicable']} not applicable, Pareto front {len(s['pareto'])}")
 
 
 def threshold_chart(rows, key, prefix, title=None, log=True, probes=None, bracket=None):

@@ -12,6 +12,7 @@ usage:
   /usr/bin/python3 tools/metrics.py RUN_DIR METRIC [key=TOML_VALUE ...] [--reference REF_RUN_DIR]
 e.g.
   tools/metrics.py out/beam watchpoint_mean_after watchpoint='"tip"' t_start=0.3 exact=-2.381e-4
+A relative data_csv or reference_csv starts at the current folder here, and at the sweep file in a sweep.
 """
 import math
 import os
@@ -290,9 +291,10 @@ def watchpoint_vs_data(run_dir, params, context):
     """A watchpoint time series against measured or published data, e.g. the elastic gate's tip
     displacement against Antoci, Gallati & Sibilla (2007) (scenarios/reference/antoci2007_gate_tip_dx.csv).
 
-    data_csv: two columns, time [s] and the value, after '#' comment lines and a header (relative paths
-    start at the sweep file). The run's series is interpolated linearly at each data time t_k in
-    [t_start, t_end] (default: all data); the run must cover those times (no extrapolation). With
+    data_csv: two columns, time [s] and the value, after '#' comment lines and a header (a relative path
+    starts at the sweep file; on the command line, at the current folder). The run's series is
+    interpolated linearly at each data time t_k in [t_start, t_end] (default: all data); the run must
+    cover those times (no extrapolation). With
     e_k = u(t_k) - u_data,k and S = max_k |u_data,k|:
         rms_abs = sqrt(mean_k e_k^2),  max_abs = max_k |e_k|,  l2_rel = rms_abs / S,  max_rel = max_abs / S
     The mean is over data points, not time-weighted: digitised curves are sampled where the digitiser
@@ -433,24 +435,38 @@ def max_density_error(run_dir, params, context):
 
 def read_reference_curve(path):
     """Two numeric columns after '#' comment lines and an optional header line (e.g. T,Z), in increasing
-    order of the first; any other line that is not two numbers is an error, not skipped."""
+    order of the first. Every other line must be exactly two comma-separated finite numbers; anything else
+    is an error naming the file and line, not skipped. The header is the first line only, and only when
+    it has two fields and neither is a number: a first row of data that fails to parse (a third column,
+    another separator, e.g. 0.0;1.0) had been taken for the header and silently lost, and a three-column
+    file had been read as its first two."""
     xs, ys = [], []
-    number_of_header = None
+    seen_line = False
     with open(path) as f:
         for number, line in enumerate(f, 1):
             s = line.strip()
             if not s or s.startswith("#"):
                 continue
+            first, seen_line = not seen_line, True
             parts = [p.strip() for p in s.split(",")]
-            try:
-                x, y = float(parts[0]), float(parts[1])
-            except (ValueError, IndexError):
-                if xs or number_of_header is not None:
-                    raise MetricError(f"{path}:{number}: not two comma-separated numbers: {s!r}")
-                number_of_header = number
-                continue
-            xs.append(x)
-            ys.append(y)
+            if len(parts) != 2:
+                raise MetricError(f"{path}:{number}: {len(parts)} comma-separated field(s), not 2 "
+                                  f"(time and value): {s!r}")
+            values = []
+            for p in parts:
+                try:
+                    values.append(float(p))
+                except ValueError:
+                    values.append(None)
+            if first and values == [None, None]:
+                continue  # the header
+            if None in values:
+                raise MetricError(f"{path}:{number}: not two numbers"
+                                  + (" (a header has no number in it)" if first else "") + f": {s!r}")
+            if not all(math.isfinite(v) for v in values):
+                raise MetricError(f"{path}:{number}: not finite: {s!r}")
+            xs.append(values[0])
+            ys.append(values[1])
     if not xs:
         raise MetricError(f"{path}: no data rows")
     if any(b <= a for a, b in zip(xs, xs[1:])):
@@ -459,7 +475,8 @@ def read_reference_curve(path):
 
 
 def reference_points(params, context, time_name):
-    """The rows of params["reference_csv"] (resolved against the sweep file) up to params[time_name + "_max"]."""
+    """The rows of params["reference_csv"] (resolved against context.base_dir: the sweep file's folder, or on
+    the command line the current folder) up to params[time_name + "_max"]."""
     x, y = read_reference_curve(context.resolve(params["reference_csv"]) if context else params["reference_csv"])
     x_max = float(params[time_name + "_max"])
     keep = x <= x_max
@@ -759,6 +776,7 @@ def main(argv):
     if ref:
         runs.append(RunInfo("reference", ref, "completed", reference=True))
     try:
+        # Relative paths as the shell sees them, where a sweep takes them from the sweep file's folder.
         out = compute(name, run_dir, params, Context(runs[0], runs, os.getcwd()))
     except MetricError as err:
         print(f"metrics: {err}", file=sys.stderr)

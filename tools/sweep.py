@@ -12,9 +12,10 @@ usage: /usr/bin/python3 tools/sweep.py SWEEP.toml [--jobs N] [--out DIR] [--only
   --out DIR       output folder (default: out/sweeps/NAME under the current folder); each run in
                   DIR/runs/SLUG-HASH, the table in DIR/results.csv, its description in DIR/sweep.json
   --only PATTERN  run only the runs whose folder name or case name matches the shell pattern (a pattern
-                  without * ? [ matches as a substring); repeatable
-  --resume        keep the results of runs already in DIR (same overrides, same scene text); metrics are
-                  recomputed from their records
+                  without * ? [ matches as a substring); repeatable. The table and charts still hold every
+                  run of the sweep with a result in DIR: the others are kept, as --resume would keep them
+  --resume        keep the results of runs already in DIR (same overrides, same scene text; not interrupted
+                  runs, nor timeouts under a shorter limit than today's); metrics are recomputed from their records
   --check         regression guard: exit 1 if a run's status or a recorded value is off (docs/sweeps.md)
   --print-expect  print the measured values as [[expect]] tables, to record them in the sweep file
   --list          print the runs and their --set arguments; run nothing
@@ -100,8 +101,8 @@ class Sweeper:
             except OSError:
                 parts.append(path)
         self.build_stamp = "; ".join(parts)
-        self.reused_other_build = False
-        self.reused_other_threads = False
+        self.reused_other_build = []  # ids of kept runs made by another build, or with another thread count
+        self.reused_other_threads = []
         self.metric_columns = []
         self.metric_errors = []
         for m in sw.metrics:
@@ -112,8 +113,8 @@ class Sweeper:
     def run_dir(self, run):
         return os.path.join(self.out, "runs", run.id)
 
-    def previous(self, run, reusing=False):
-        """The row of an earlier identical run in the output folder, or None."""
+    def previous(self, run):
+        """The row of an earlier identical run in the output folder (read again from its record), or None."""
         try:
             with open(os.path.join(self.run_dir(run), "result.json")) as f:
                 data = json.load(f)
@@ -125,13 +126,18 @@ class Sweeper:
         # A run that timed out under a shorter limit than today's may complete now (a missing limit: older file).
         if data["row"].get("status") == "timeout" and self.timeout_of(run) > data.get("timeout_s", math.inf):
             return None
-        if reusing and data.get("build") != self.build_stamp:
-            self.reused_other_build = True
-        if reusing and data.get("threads") != self.threads:  # its wall and CPU times are of another thread count
-            self.reused_other_threads = True
-        if reusing:
-            return self.resummarize(run, data)
-        return data["row"]
+        row = self.resummarize(run, data)
+        # Said in the row too: results.csv and its charts outlive the warning on stderr.
+        notes = []
+        if data.get("build") != self.build_stamp:
+            self.reused_other_build.append(run.id)
+            notes.append("kept: made by another build of sphfsi")
+        if data.get("threads") != self.threads:  # its wall and CPU times are of another thread count
+            self.reused_other_threads.append(run.id)
+            notes.append(f"kept: ran with {data.get('threads')} threads per run, not {self.threads}")
+        if notes:
+            row["notes"] = "; ".join([n for n in (row.get("notes") or "").split("; ") if n] + notes)
+        return row
 
     def resummarize(self, run, data):
         """A kept run's row, its columns read again from its record.h5 with today's tools: only what the
@@ -157,7 +163,7 @@ class Sweeper:
     def execute(self, run):
         """Runs one coordinator (or reuses its earlier result under --resume); returns its row."""
         if self.resume:
-            row = self.previous(run, reusing=True)
+            row = self.previous(run)
             if row is not None:
                 row = dict(row)
                 row["reused"] = True
@@ -180,15 +186,12 @@ class Sweeper:
         return row
 
     def infos(self, rows_by_id, runs=None):
-        """metrics.RunInfo for every run of the sweep (unselected ones from their result.json, if any)."""
+        """metrics.RunInfo for every run of the sweep; one without a row (unselected runs that were kept have
+        theirs: run_grid) is "not run"."""
         out = []
         for r in (runs if runs is not None else self.sw.runs):
             row = rows_by_id.get(r.id)
-            if row is None:
-                prev = self.previous(r)
-                status = prev["status"] if prev else "not run"
-            else:
-                status = row.get("status", "")
+            status = row.get("status", "") if row is not None else "not run"
             out.append(metrics.RunInfo(r.id, self.run_dir(r), status, r.settings, r.overrides, r.case,
                                        r.reference))
         return out
@@ -244,14 +247,40 @@ def progress(i, n, run, row, extra=""):
     print(f"[{i}/{n}] {status:<11} {run.label()}  {cost}{reused}{extra}{msg}", flush=True)
 
 
+def keep_unselected(sweeper, selected):
+    """Under --only, the rows of the runs not selected whose folders hold a result usable today (as --resume
+    would keep it), their metrics computed: results.csv and the charts stay those of the whole sweep instead of
+    the subset's (which overwrote them), and a reference run that is not selected is compared (build, threads)
+    like any kept run. Returns (rows by id, ids of unselected runs without such a result)."""
+    chosen = {r.id for r in selected}
+    kept, missing = {}, []
+    for r in sweeper.sw.runs:
+        if r.id in chosen:
+            continue
+        row = sweeper.previous(r)
+        if row is None:
+            missing.append(r.id)
+        else:
+            kept[r.id] = dict(row, reused=True)
+    infos = sweeper.infos(kept)
+    for r in sweeper.sw.runs:
+        if r.id in kept:
+            sweeper.compute_metrics(r, kept[r.id], infos, "plain")
+    return kept, missing
+
+
 def run_grid(sweeper, selected):
-    rows_by_id = {}
+    rows_by_id, missing = keep_unselected(sweeper, selected)
+    kept = len(rows_by_id)
+    if kept or missing:
+        print(f"sweep: {kept} run(s) not selected kept in the table from their earlier results"
+              + (f"; {len(missing)} not selected have none usable (not in the table)" if missing else ""), flush=True)
     csv_path = os.path.join(sweeper.out, "results.csv")
     n = len(selected)
     done = 0
 
     def snapshot():
-        rows = [sweeper.full_row(r, rows_by_id[r.id]) for r in selected if r.id in rows_by_id]
+        rows = [sweeper.full_row(r, rows_by_id[r.id]) for r in sweeper.sw.runs if r.id in rows_by_id]
         results.write_csv(csv_path, sweeper.columns(), rows)
 
     interrupted = False
@@ -284,7 +313,7 @@ def run_grid(sweeper, selected):
                     rows_by_id[run.id] = row
                     sweeper.compute_metrics(run, row, sweeper.infos(rows_by_id), "plain")
     infos = sweeper.infos(rows_by_id)
-    for r in selected:
+    for r in sweeper.sw.runs:
         if r.id in rows_by_id:
             sweeper.compute_metrics(r, rows_by_id[r.id], infos, "reference")
     snapshot()
@@ -563,13 +592,18 @@ def main(argv=None):
     rows_by_id, interrupted = run_grid(sweeper, selected)
     csv_path = os.path.join(out, "results.csv")
     write_description(sweeper, started)
+
+    def some(ids):
+        return f"{len(ids)} kept result(s) (" + ", ".join(ids[:4]) + (", ..." if len(ids) > 4 else "") + ")"
+
     if sweeper.reused_other_build:
-        print("sweep: note: some kept results were made by another build of sphfsi than this one", file=sys.stderr)
+        print(f"sweep: note: {some(sweeper.reused_other_build)} were made by another build of sphfsi than this one "
+              "(their rows' notes say so; a metric against such a reference run compares two builds)", file=sys.stderr)
     if sweeper.reused_other_threads:
-        print(f"sweep: note: some kept results ran with another thread count than this sweep's {sweeper.threads}: "
-              "their wall and CPU times do not compare with the others", file=sys.stderr)
+        print(f"sweep: note: {some(sweeper.reused_other_threads)} ran with another thread count than this sweep's "
+              f"{sweeper.threads}: their wall and CPU times do not compare with the others", file=sys.stderr)
     counts = {}
-    for r in selected:
+    for r in sw.runs:  # the table's rows: under --only, the kept ones too
         if r.id in rows_by_id:
             s = rows_by_id[r.id].get("status")
             counts[s] = counts.get(s, 0) + 1

@@ -205,6 +205,10 @@ def test_watchpoint_against_data():
     scale = max(abs(v[i] + 1e-6) for i in pick)
     assert got["n_points"] == 4 and abs(got["rms_abs"] - 1e-6) < 1e-15 and abs(got["max_abs"] - 1e-6) < 1e-15, got
     assert abs(got["l2_rel"] - 1e-6 / scale) < 1e-12 and abs(got["max_rel"] - 1e-6 / scale) < 1e-12, got
+    # On the command line a relative data_csv starts at the current folder (in a sweep: at the sweep file).
+    p = subprocess.run(["/usr/bin/python3", os.path.join(harness.ROOT, "tools", "metrics.py"), ".", "watchpoint_vs_data",
+                        "watchpoint=tip", "data_csv=data.csv"], cwd=d, capture_output=True, text=True, timeout=60)
+    assert p.returncode == 0 and "watchpoint_vs_data.n_points = 4" in p.stdout, p.stdout + p.stderr
     write(path, "t,dy\n0.0,0.0\n1.0,0.0\n")  # beyond the run's 0.05 s: reported, not extrapolated
     expect_metric_error("watchpoint_vs_data", d, {"watchpoint": "tip", "data_csv": "data.csv"}, ctx, "covers")
 
@@ -559,6 +563,159 @@ def test_resume_reads_a_kept_runs_record_again():
     assert rc == 0 and "(kept)" in text, text
     for col in ("coupling_iterations", "element_steps", "windows", "t_end", "status", "wall_s", "cpu_s", "exit_code"):
         assert kept[col] == first[col], (col, kept[col], first[col])
+
+
+_ONLY = {}
+
+
+def only_sweep():
+    """A reference run, a coarse run and one never run: all three but the last run first; then, after the
+    reference's result.json is made to name another build and thread count, --only coarse (no --resume)."""
+    if _ONLY:
+        return _ONLY
+    d = harness.shared_out_dir("sweep-only")
+    path = write(os.path.join(d, "s.toml"), f'''
+[sweep]
+scene = "{BEAM}"
+threads_per_run = 1
+[fixed]
+"run.end_time" = 0.01
+[[case]]
+name = "finest"
+reference = true
+set = {{ "structure.time.dt_max" = 1e-4 }}
+[[case]]
+name = "coarse"
+set = {{ "structure.time.dt_max" = 1e-3 }}
+[[case]]
+name = "never"
+set = {{ "structure.time.dt_max" = 5e-4 }}
+[[metric]]
+name = "watchpoint_vs_reference_run"
+label = "tip"
+watchpoint = "tip"
+[chart]
+x = ["cpu_s"]
+y = ["tip.l2_rel"]
+''')
+    out = os.path.join(d, "out")
+    rc, text = sweep(path, "--out", out, "--only", "finest", "--only", "coarse")
+    assert rc == 0 and [r["status"] for r in rows_of(out)] == ["completed", "completed"], text
+    reference = [r for r in rows_of(out) if r["case"] == "finest"][0]["run"]
+    result = os.path.join(out, "runs", reference, "result.json")
+    with open(result) as f:
+        data = json.load(f)
+    data.update(build="another build", threads=7)
+    with open(result, "w") as f:
+        json.dump(data, f)
+    rc, text = sweep(path, "--out", out, "--only", "coarse")
+    print(text)
+    _ONLY.update(out=out, rc=rc, text=text, rows={r["case"]: r for r in rows_of(out)})
+    return _ONLY
+
+
+def test_only_keeps_the_other_runs_in_the_table_and_charts():
+    """--only reruns the selected runs; the table and the charts still hold every run of the sweep with a
+    usable result on disk (they had held the subset alone, overwriting the whole sweep's), and a run with
+    none is left out and counted."""
+    s = only_sweep()
+    assert s["rc"] == 0, s["text"]
+    assert sorted(s["rows"]) == ["coarse", "finest"], s["rows"]
+    assert s["rows"]["finest"]["status"] == "completed" and s["rows"]["finest"]["tip.l2_rel"] == ""
+    assert num(s["rows"]["coarse"]["tip.l2_rel"]) > 0, s["rows"]["coarse"]
+    assert "1 run(s) not selected kept in the table" in s["text"] and "1 not selected have none usable" in s["text"]
+    assert "[1/1]" in s["text"] and "(kept)" not in s["text"], s["text"]  # only the selected run ran
+    # The chart has the coarse run as a point and the kept reference run as a triangle.
+    assert re.search(r"chart: \S+chart-tip\.l2_rel-vs-cpu_s\.png/\.svg \(1 runs in 1 series, 0 did not complete, "
+                     r"0 no value, 1 without error", s["text"]), s["text"]
+
+
+def test_only_compares_the_build_of_a_reference_run_not_selected():
+    """A reference run that --only leaves out is compared like a run --resume keeps: metrics against a
+    reference made by another build, or timed with another thread count, are warned about and noted in its
+    row (they had been computed against it silently)."""
+    s = only_sweep()
+    notes = s["rows"]["finest"]["notes"]
+    assert "kept: made by another build of sphfsi" in notes and "kept: ran with 7 threads per run, not 1" in notes, notes
+    assert re.search(r"note: 1 kept result\(s\) \(finest-[0-9a-f]{8}\) were made by another build", s["text"]), s["text"]
+    assert "ran with another thread count than this sweep's 1" in s["text"], s["text"]
+    assert "kept" not in s["rows"]["coarse"]["notes"], s["rows"]["coarse"]["notes"]
+
+
+def test_reference_curve_lines_are_two_numbers():
+    """read_reference_curve: exactly two comma-separated numbers a line, after '#' lines and an optional
+    header of two fields that are not numbers. A three-column file had been read as its first two columns, and
+    a first row that did not parse (another separator) had been taken for the header and lost, both silently."""
+    d = harness.out_dir("sweep-reference-curve")
+    path = os.path.join(d, "curve.csv")
+    for text, line in (("t,dx,dy\n0,1,9\n0.1,2,9\n", 1),  # a third column
+                       ("0.0;1.0\n0.1;2.0\n", 1),  # another separator: no header to lose
+                       ("# data\nt,dx\n0,1\n0.1,2,3\n", 4),
+                       ("t,dx\n0,1\n0.1\n", 3),
+                       ("t,dx\n0,1\nx,2\n", 3),
+                       ("t,1\n0,1\n0.1,2\n", 1),  # a header holds no number
+                       ("t,dx\n0,1\n0.1,inf\n", 3),
+                       ("t,dx\n0,1\nt,dx\n0.1,2\n", 3)):  # a second header
+        write(path, text)
+        try:
+            metrics.read_reference_curve(path)
+            raise AssertionError(f"accepted {text!r}")
+        except metrics.MetricError as err:
+            assert f"{path}:{line}: " in str(err), (text, str(err))
+    for text in ("0.0,1.0\n0.1,2.0\n", "# a comment\n\nT,Z\n0.0, 1.0\n0.1,2.0\n"):
+        x, y = metrics.read_reference_curve(write(path, text))
+        assert list(x) == [0.0, 0.1] and list(y) == [1.0, 2.0], (text, x, y)
+
+
+def test_chart_draws_no_infinite_error_as_exact():
+    """An infinite or NaN error (results.cell writes inf as "inf") has no value to draw: a cross with a note,
+    counted as no value; it had been drawn as a triangle, "no positive error (reference / exact)", i.e. as
+    exact. A triangle is kept for an error of exactly 0; a negative value (a signed column) is counted apart."""
+    rows = [{"status": "completed", "cpu_s": "1.0", "err": "0.1"},
+            {"status": "completed", "cpu_s": "2.0", "err": "0.05"},
+            {"status": "completed", "cpu_s": "3.0", "err": "inf"},
+            {"status": "completed", "cpu_s": "4.0", "err": "nan"},
+            {"status": "completed", "cpu_s": "5.0", "err": "-inf"},
+            {"status": "completed", "cpu_s": "6.0", "err": "0.0"},
+            {"status": "completed", "cpu_s": "7.0", "err": "-0.02"}]
+    prefix = os.path.join(harness.out_dir("chart-not-finite"), "chart")
+    summary = chart.make_chart(rows, "cpu_s", "err", [], prefix)
+    got = tuple(summary.get(k) for k in ("plotted", "failed", "no_value", "no_error", "negative"))
+    assert got == (2, 0, 3, 1, 1), summary
+
+
+def test_chart_prints_no_unit_it_does_not_know():
+    """A metric's value and abs_error have the unit of what it measures ("as the quantity" in sweep.json):
+    the axis label had printed that as the unit, "[as the quantity]"."""
+    desc = {"columns": {"tip.abs_error": {"meaning": "watchpoint_final: |value - exact|", "unit": "as the quantity"},
+                        "tip.rms_abs": {"meaning": "RMS of u - u_data", "unit": "m"},
+                        "tip.rel_error": {"meaning": "|value - exact| / |exact|", "unit": "-"}}}
+    assert chart.axis_label("tip.abs_error", desc) == "tip.abs_error: watchpoint_final: |value - exact|"
+    assert chart.axis_label("tip.rms_abs", desc).endswith("[m]") and chart.axis_label("tip.rel_error", desc).endswith("[-]")
+
+
+def test_elastic_gate_table_has_the_sweeps_columns():
+    """The committed table of sweeps/elastic_gate.toml has the columns the sweep writes today. The minimum of
+    /windows/converged (1: every window converged) was labelled "unconverged", which reads the other way."""
+    sw = specs.load(os.path.join(harness.ROOT, "sweeps", "elastic_gate.toml"))
+    cols = [f"{m['label']}.{k}" for m in sw.metrics for k in metrics.METRICS[m["name"]].columns]
+    with open(os.path.join(harness.ROOT, "docs", "validation", "elastic_gate.csv"), newline="") as f:
+        header = next(csv.reader(f))
+    assert header == results.columns(sw.setting_columns, cols), header
+    assert "converged_min.value" in header and not any("unconverged" in c for c in header), header
+
+
+def test_fluid_count_falls_back_to_the_total():
+    """docs/sweeps.md (particle_steps) says walls are counted when the fluid reports no fluid count and its
+    frames hold no kind: the count falls back to the total, as tools/sweeplib/record.py does."""
+    import h5py
+    from sweeplib import record
+    d = harness.out_dir("sweep-fluid-count")
+    with h5py.File(os.path.join(d, "record.h5"), "w") as f:
+        f.create_group("participants/fluid").attrs["particles"] = 12
+        f.create_dataset("frames/fluid/position", (1, 12, 2), dtype="float64")
+    with record.open_record(d) as f:
+        assert record.fluid_particle_count(f, f["participants/fluid"].attrs) == 12
 
 
 def test_watchpoint_rows_stop_at_a_row_cut_short():

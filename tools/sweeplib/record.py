@@ -2,7 +2,8 @@
 
 Costs (docs/sweeps.md, "Columns"):
   particle_steps = fluid particles x sum over windows of fluid_substeps (walls and solid particles are not
-                   counted; a predictor-corrector step counts once though it evaluates forces twice). The
+                   counted, unless the fluid count falls back to the total: fluid_particle_count; a
+                   predictor-corrector step counts once though it evaluates forces twice). The
                    record's fluid_substeps already sums the sub-steps of every implicit coupling iteration
                    (each re-runs the window from the saved state), so this is the work actually done.
   element_steps  = structure elements x sum over windows of structure_substeps;
@@ -124,7 +125,8 @@ def read_record(run_dir):
 
 def fluid_particle_count(f, attrs):
     """Fluid particles: a READY info key if there is one, else the kind == 0 rows of the first frame, else
-    the total count (and then particle_steps counts walls too; docs/sweeps.md says so)."""
+    the total count (and then particle_steps counts walls too; docs/sweeps.md, "Columns", says so under
+    particle_steps)."""
     n = _first_attr(attrs, FLUID_COUNT_KEYS)
     if n is not None:
         return n

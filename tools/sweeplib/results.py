@@ -19,7 +19,7 @@ RUN_COLUMNS = {
     "t_end": ("simulated time reached (end of the last window)", "s"),
     "windows": ("coupling windows taken", ""),
     "coupling_iterations": ("sum over windows of coupling iterations", ""),
-    "fluid_particles": ("fluid particles (walls and solids not counted)", ""),
+    "fluid_particles": ("fluid particles (walls and solids not counted; the total where the record does not tell them apart)", ""),
     "particles_total": ("all SPH particles (fluid, wall, solid)", ""),
     "fluid_substeps": ("sum over windows of fluid sub-steps", ""),
     "particle_steps": ("fluid particles x sum of fluid sub-steps, every coupling iteration's (empty without a fluid)",
