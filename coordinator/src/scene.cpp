@@ -1,5 +1,7 @@
 #include "sphfsi/coordinator/scene.hpp"
 
+#include <cstdint>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <toml++/toml.h>
@@ -38,6 +40,15 @@ Value from_toml(const toml::node& node, const std::string& path) {
 std::string read_file(const std::filesystem::path& file) {
     std::error_code ec;
     if (std::filesystem::is_directory(file, ec)) throw ConfigError(file.string() + ": is a directory, not a scene file");
+    // Only a regular file, and not a huge one: /dev/zero was read until memory ran out (std::bad_alloc, an
+    // abort) and a FIFO without a writer hung `check` (a review, 2026-11-28). A missing file falls through to
+    // the "cannot read" below.
+    constexpr std::uintmax_t max_bytes = 16u << 20;
+    if (std::filesystem::exists(file, ec) && !std::filesystem::is_regular_file(file, ec))
+        throw ConfigError(file.string() + ": is not a regular file, so not a scene file");
+    if (const auto size = std::filesystem::file_size(file, ec); !ec && size > max_bytes)
+        throw ConfigError(file.string() + ": " + std::to_string(size) + " bytes; a scene file is at most " +
+                          std::to_string(max_bytes) + " bytes (16 MiB)");
     std::ifstream in(file, std::ios::binary);
     if (!in) throw ConfigError(file.string() + ": cannot read the scene file");
     std::ostringstream s;

@@ -42,10 +42,10 @@ void check_boxes_inside_tank(const Value& fluid, const std::string& path, Errors
             const std::string where = key(path, std::string(list) + "[" + std::to_string(i++) + "]");
             const double x0 = num(b, "x0"), y0 = num(b, "y0"), w = num(b, "width"), h = num(b, "height");
             if (x0 < -slack || y0 < -slack || x0 + w > W + slack || y0 + h > H + slack)
-                errors.add(&b, "key '" + where + "': the box [" + std::to_string(x0) + ", " + std::to_string(x0 + w) +
-                                   "] x [" + std::to_string(y0) + ", " + std::to_string(y0 + h) +
-                                   "] m does not lie inside the tank [0, " + std::to_string(W) + "] x [0, " +
-                                   std::to_string(H) + "] m");
+                errors.add(&b, "key '" + where + "': the box [" + exact(x0) + ", " + exact(x0 + w) +
+                                   "] x [" + exact(y0) + ", " + exact(y0 + h) +
+                                   "] m does not lie inside the tank [0, " + exact(W) + "] x [0, " +
+                                   exact(H) + "] m");
             if (w < dp * (1 - 1e-9) || h < dp * (1 - 1e-9))
                 errors.add(&b, "key '" + where + "': the box is thinner than one particle spacing dp = " + fmt(dp) + " m");
         }
@@ -87,12 +87,12 @@ void check_gate(const Value& fluid, const std::string& path, Errors& errors) {
     const double W = num(tank, "width"), H = num(tank, "height"), dp = num(fluid, "dp");
     const auto [x0, t, h] = gate_box(fluid);
     if (x0 < -slack || x0 + t > W + slack)
-        errors.add(gate, "key '" + key(path, "gate.x0") + "': the gate [" + std::to_string(x0) + ", " + std::to_string(x0 + t) +
-                             "] m does not lie inside the tank [0, " + std::to_string(W) + "] m");
+        errors.add(gate, "key '" + key(path, "gate.x0") + "': the gate [" + exact(x0) + ", " + exact(x0 + t) +
+                             "] m does not lie inside the tank [0, " + exact(W) + "] m");
     if (h > H + slack)
-        errors.add(gate, "key '" + key(path, "gate.height") + "': higher than the tank (" + std::to_string(H) + " m)");
+        errors.add(gate, "key '" + key(path, "gate.height") + "': higher than the tank (" + exact(H) + " m)");
     if (t < dp * (1 - 1e-9))
-        errors.add(gate, "key '" + key(path, "gate.thickness") + "': thinner than one particle spacing dp = " + std::to_string(dp) + " m");
+        errors.add(gate, "key '" + key(path, "gate.thickness") + "': thinner than one particle spacing dp = " + exact(dp) + " m");
     if (tank.at("closed_top").as_bool() || periodic_axes(fluid).y)
         errors.add(gate, "key '" + key(path, "gate") + "': the gate stands on the floor and rises out through an open top; "
                                                         "it needs tank.closed_top = false and no periodic y axis");
@@ -165,14 +165,14 @@ void check_combinations(const Value& fluid, const std::string& path, Errors& err
     const auto needed = static_cast<long long>(std::ceil(support / num(fluid, "dp") - 1e-9));
     const bool walled = !(periodic.x && periodic.y);
     if (walled && needed > kMaxWallLayers)
-        errors.add(&fluid.at("h_over_dp"), "key '" + key(path, "h_over_dp") + "': the support radius (" + std::to_string(support) +
+        errors.add(&fluid.at("h_over_dp"), "key '" + key(path, "h_over_dp") + "': the support radius (" + exact(support) +
                                                " m) needs " + std::to_string(needed) + " wall layers, more than the " +
                                                std::to_string(kMaxWallLayers) + " allowed; allowed with kernel \"" +
                                                fluid.at("kernel").as_string() + "\": h_over_dp <= " +
                                                std::to_string(kMaxWallLayers / kernel_support_factor(fluid.at("kernel").as_string())));
     else if (walled && static_cast<double>(layers) * num(fluid, "dp") < support * (1.0 - 1e-9))
         errors.add(&tank, "key '" + key(path, "tank.wall_layers") + "': " + std::to_string(layers) +
-                              " layers of dp are thinner than the kernel's support radius (" + std::to_string(support) +
+                              " layers of dp are thinner than the kernel's support radius (" + exact(support) +
                               " m); allowed: at least " + std::to_string(needed));
     if (periodic.y && tank.at("closed_top").as_bool())
         errors.add(&tank, "key '" + key(path, "tank.closed_top") + "': a tank periodic in y has no bottom or top wall");
@@ -254,9 +254,11 @@ TableSchema build() {
         .at_least(-1e4).at_most(1e4)
         .fallback(Value(Value::Array{Value(0.0), Value(-9.81)}));
     s.choice("periodic", {"none", "x", "y", "xy"},
-             "periodic axes; the tank has no walls across a periodic axis. Along one, the water's lattice is stretched "
-             "evenly to fill the period while each particle keeps the mass rho0 dp^2: a period that is not a whole "
-             "number of dp starts the water rarefied by dp / spacing along it (20.3 dp: 1.5 %)")
+             "periodic axes; the tank has no walls across a periodic axis. Along one, the water's lattice is spread "
+             "evenly over the period, the nearest whole number of particles, while each keeps the mass rho0 dp^2: a "
+             "period that is not a whole number of dp starts the water off density by dp / spacing along it, "
+             "rarefied below the half (20.3 dp: 1.5 %) and compressed above it (10.7 dp: 2.8 %). Make the period a "
+             "whole number of dp")
         .fallback("none");
     s.integer("threads", "OpenMP threads; 0 = all cores the process may use (OMP_NUM_THREADS). Scenes under 4000 "
                          "particles run on one thread: thread synchronisation would cost more than it saves")

@@ -2,8 +2,10 @@
 
 #include "sphfsi/protocol/codec.hpp"
 
+#include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
 #include <sstream>
 
@@ -12,10 +14,15 @@ namespace {
 std::string join(const std::string& path, const std::string& name) {
     return path.empty() ? name : path + "." + name;
 }
+// Six significant digits where they are the number itself, else every digit it takes to read it back: a refused
+// 1000000.5 printed as "1e+06" beside "allowed: <= 1e+06" (a review, 2026-11-28).
 std::string fmt(double x) {
     std::ostringstream s;
     s << x;
-    return s.str();
+    if (std::strtod(s.str().c_str(), nullptr) == x || !std::isfinite(x)) return s.str();
+    char buf[32];
+    const auto r = std::to_chars(buf, buf + sizeof buf, x);
+    return std::string(buf, r.ptr);
 }
 // A markdown table cell: a literal '|' (as in |residual| or |g|) would end the cell, so it is escaped.
 std::string table_cell(const std::string& text) {

@@ -105,6 +105,24 @@ def test_missing_file_is_named():
     assert code == 2 and "/nonexistent/scene.toml: cannot read the scene file" in text, text
     code, text = harness.sphfsi("check", harness.SCENES)
     assert code == 2 and "is a directory, not a scene file" in text, text
+    # A device or a FIFO is not read at all: /dev/zero was read until memory ran out (an abort), and a FIFO
+    # without a writer hung `check` (a review, 2026-11-28).
+    code, text = harness.sphfsi("check", "/dev/zero", timeout=10)
+    assert code == 2 and "/dev/zero: is not a regular file" in text, text
+    fifo = os.path.join(harness.out_dir("fifo"), "scene.toml")
+    os.mkfifo(fifo)
+    code, text = harness.sphfsi("check", fifo, timeout=10)
+    assert code == 2 and "is not a regular file" in text, text
+
+
+def test_a_refused_number_is_printed_as_it_was_given():
+    """Six significant digits printed a refused 1000000.5 as "1e+06" beside "allowed: <= 1e+06", and a box
+    1e-7 m outside the tank as [-0.000000, ...] (a review, 2026-11-28)."""
+    scene = os.path.join(harness.ROOT, "scenarios", "elastic_gate.toml")
+    code, text = harness.sphfsi("check", scene, "--set", "run.end_time=1000000.5")
+    assert code == 2 and "got 1000000.5; allowed: a number > 0 and <= 1e+06" in text, text
+    code, text = harness.sphfsi("check", scene, "--set", "fluid.water[0].x0=-1e-7")
+    assert code == 2 and "the box [-1e-07, " in text, text
 
 
 # Each was found by a review (2026-11-27) to pass `check` and then fail only after the participants had started,
