@@ -1,6 +1,11 @@
 #include "sphfsi/coordinator/scene.hpp"
 
+#include "sphfsi/protocol/codec.hpp"
+
+#include <unistd.h>
+
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -107,8 +112,34 @@ std::optional<std::vector<std::string>> Scene::custom_program(std::string_view r
     return words;
 }
 
+namespace {
+// Why argv[0] of a participant command cannot be started, or "" when it can (as execvp would find it).
+std::string unrunnable(const std::string& program) {
+    auto runnable = [](const std::filesystem::path& p) {
+        std::error_code ec;
+        return std::filesystem::is_regular_file(p, ec) && ::access(p.c_str(), X_OK) == 0;
+    };
+    if (program.find('/') != std::string::npos)
+        return runnable(program) ? "" : "is not an executable file";
+    const char* path = std::getenv("PATH");
+    std::istringstream dirs(path ? path : "/usr/local/bin:/usr/bin:/bin");
+    for (std::string dir; std::getline(dirs, dir, ':');)
+        if (runnable(std::filesystem::path(dir.empty() ? "." : dir) / program)) return "";
+    return "is not an executable file on PATH";
+}
+}  // namespace
+
 Scene load_scene(const std::filesystem::path& file, const std::vector<std::string>& overrides) {
-    return parse_scene(read_file(file), file, overrides);
+    Scene scene = parse_scene(read_file(file), file, overrides);
+    // A participant command that cannot start passed `check`, and a run then failed only after creating its
+    // record (with --overwrite, in place of the earlier one; a review, 2026-11-28). With --listen the command
+    // is not used, but a scene that names one should still name one that exists.
+    for (const char* role : {"fluid", "structure"})
+        if (const auto argv = scene.custom_program(role); argv && !argv->empty())
+            if (const std::string why = unrunnable(argv->front()); !why.empty())
+                throw ConfigError(file.string() + ": key 'participants." + role + "': the program '" +
+                                  protocol::printable(argv->front()) + "' " + why);
+    return scene;
 }
 
 Scene parse_scene(std::string text, const std::filesystem::path& file, const std::vector<std::string>& overrides) {

@@ -168,6 +168,11 @@ MISTAKES_FOUND_LATE = [
                    "{start=[0.0,0.0],end=[1.0,0.0],n_elements=20}]"],
      "key 'structure.members[1]': lies along members[0] over a common stretch"),
     ("beam_only", ["structure.material.E=1e308"], "key 'structure.material.E': got 1e+308"),
+    # A participant that cannot start failed the run after its record was created (a review, 2026-11-28).
+    ("elastic_gate", ['participants.fluid="/nonexistent/prog --x"'],
+     "key 'participants.fluid': the program '/nonexistent/prog' is not an executable file"),
+    ("elastic_gate", ['participants.structure="no-such-solver-anywhere"'],
+     "the program 'no-such-solver-anywhere' is not an executable file on PATH"),
     ("dam_break", ["fluid.pressure.model=pcisph", "fluid.density.method=summation",
                    "fluid.pressure.min_iterations=10", "fluid.pressure.max_iterations=5"],
      "key 'fluid.pressure.min_iterations': 10 is more than pressure.max_iterations (5)"),
