@@ -79,7 +79,7 @@ TEST_SUITE("scene") {
                   .find("grid cell indices are 32-bit") != std::string::npos);
         CHECK(problems(with(dam_break(0.005), {{"kernel", "quartic"}})).find("allowed: one of") != std::string::npos);
         // The Gaussian's support, 3 h = 4.5 dp, needs 5 wall layers; the default 3 would cut its sums at a wall.
-        CHECK(problems(with(dam_break(0.005), {{"kernel", "gaussian"}})).find("tank.wall_layers': 3 layers of dp are thinner than the kernel's support radius (0.022500 m); allowed: at least 5") != std::string::npos);
+        CHECK(problems(with(dam_break(0.005), {{"kernel", "gaussian"}})).find("tank.wall_layers': 3 layers of dp are thinner than the kernel's support radius (0.0225 m); allowed: at least 5") != std::string::npos);
         CHECK(problems(with(dam_break(0.005), {{"kernel", "gaussian"}, {"tank.wall_layers", 5}})).empty());
         CHECK(problems(with(dam_break(0.005), {{"dp", -1.0}})).find("fluid.dp") != std::string::npos);
         CHECK(problems(with(dam_break(0.005), {{"nonsense", 1.0}})).find("unknown key 'fluid.nonsense'") != std::string::npos);
