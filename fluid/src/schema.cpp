@@ -249,7 +249,7 @@ TableSchema build() {
              "smoothing kernel: \"mueller\" = the thesis's set (poly6 densities, spiky pressure gradients), "
              "\"wendland\" = Wendland quintic C2, \"cubic_spline\" = cubic B-spline, \"gaussian\" = truncated at 3h")
         .fallback("wendland");
-    s.number("rho0", "rest density").unit("kg/m^3").greater_than(0).fallback(1000.0);
+    s.number("rho0", "rest density (bounded as a typo guard: no liquid is above 2.3e4)").unit("kg/m^3").greater_than(0).at_most(1e5).fallback(1000.0);
     s.vector("gravity", 2, "body force per unit mass (also any imposed mean pressure gradient)").unit("m/s^2")
         .at_least(-1e4).at_most(1e4)
         .fallback(Value(Value::Array{Value(0.0), Value(-9.81)}));
@@ -306,7 +306,7 @@ TableSchema build() {
     gate.number("x0", "left face").unit("m").required();
     gate.number("thickness", "thickness; 0 = tank.wall_layers dp, a full kernel support").unit("m").at_least(0).fallback(0.0);
     gate.number("height", "height above the floor; 0 = the tank height").unit("m").at_least(0).fallback(0.0);
-    gate.number("lift_speed", "speed at which the gate rises from t = 0").unit("m/s").greater_than(0).required();
+    gate.number("lift_speed", "speed at which the gate rises from t = 0").unit("m/s").greater_than(0).at_most(1e3).required();
 
     TableSchema& pressure = s.table("pressure", "pressure model");
     pressure.choice("model", {"standard", "wcsph", "pcisph"},
@@ -314,7 +314,7 @@ TableSchema build() {
                     "\"pcisph\": predictive-corrective incompressible SPH (Solenthaler & Pajarola 2009)")
         .fallback("wcsph");
     pressure.number("k", "stiffness of the standard SPH equation of state").unit("m^2/s^2").greater_than(0).fallback(1000.0);
-    pressure.number("c0", "WCSPH speed of sound; 0 = 10 u_max").unit("m/s").at_least(0).fallback(0.0);
+    pressure.number("c0", "WCSPH speed of sound; 0 = 10 u_max (bounded as a typo guard: water's own is 1480)").unit("m/s").at_least(0).at_most(1e5).fallback(0.0);
     pressure.number("u_max", "expected largest flow speed for c0 = 10 u_max; 0 = sqrt(2 |g| H) with H the highest water top")
         .unit("m/s").at_least(0).fallback(0.0);
     // Upper bounds far beyond any water model: 1e300 passed and the first step's acceleration was NaN.
@@ -360,7 +360,7 @@ TableSchema build() {
                      "\"artificial\": Monaghan (1992) with alpha; \"morris\": laminar, Morris et al. (1997); "
                      "\"mueller\": Laplacian of Mueller's viscosity kernel (the thesis)")
         .fallback("artificial");
-    viscosity.number("alpha", "artificial viscosity coefficient").at_least(0).fallback(0.01);
+    viscosity.number("alpha", "artificial viscosity coefficient (0.01 - 0.1 is usual)").at_least(0).at_most(10).fallback(0.01);
     viscosity.number("nu", "kinematic viscosity for \"morris\" and \"mueller\"").unit("m^2/s").at_least(0).fallback(1e-6);
 
     TableSchema& boundary = s.table("boundary", "wall and solid particles");
@@ -380,7 +380,7 @@ TableSchema build() {
                                   "back with (turn it on for violent impacts, e.g. scenarios/elastic_obstacle.toml)")
         .fallback(false);
     boundary.number("repulsive_d", "strength D of the repulsive force; 0 = 5 |g| H with H the highest water top")
-        .unit("m^2/s^2").at_least(0).fallback(0.0);
+        .unit("m^2/s^2").at_least(0).at_most(1e6).fallback(0.0);
 
     TableSchema& surface = s.table("free_surface", "free-surface detection and wind stress");
     surface.number("threshold", "a particle is on the free surface when the divergence of position (2 inside the "
@@ -406,7 +406,7 @@ TableSchema build() {
     // Capped like cfl, well above the default, so that a study can take this condition out of the way.
     time.number("force_factor", "lambda_F in dt <= lambda_F sqrt(h / |a|)").greater_than(0).at_most(10).fallback(0.25);
     time.number("viscous_factor", "lambda_nu in dt <= lambda_nu h^2 / nu").greater_than(0).at_most(1).fallback(0.125);
-    time.number("dt_min", "step floor: a stable step below it stops the run as diverged").unit("s").greater_than(0).fallback(1e-8);
+    time.number("dt_min", "step floor: a stable step below it stops the run as diverged").unit("s").greater_than(0).at_most(1.0).fallback(1e-8);
     time.number("dt_max", "largest step; 0 = no cap").unit("s").at_least(0).fallback(0.0);
 
     TableSchema& failure = s.table("failure", "bounds beyond which the run stops as diverged");

@@ -342,7 +342,7 @@ TableSchema build() {
     time.number("rho_inf", "generalized_alpha: spectral radius at omega dt -> infinity (1 = no damping)")
         .at_least(0).at_most(1).fallback(0.9);
     time.number("dt_max", "largest step the structure asks for (ADVANCED dt_wanted); sub-steps the coordinator "
-                          "sets are taken as sent").unit("s").greater_than(0).fallback(1e-3);
+                          "sets are taken as sent").unit("s").at_least(1e-12).fallback(1e-3);
     time.integer("resolved_modes", "the accuracy limit on the step resolves this many lowest elastic modes")
         .at_least(1).at_most(50).fallback(3);
     time.number("steps_per_period", "accuracy limit: at least this many steps per period of the highest resolved mode, "

@@ -168,6 +168,10 @@ MISTAKES_FOUND_LATE = [
                    "{start=[0.0,0.0],end=[1.0,0.0],n_elements=20}]"],
      "key 'structure.members[1]': lies along members[0] over a common stretch"),
     ("beam_only", ["structure.material.E=1e308"], "key 'structure.material.E': got 1e+308"),
+    # Accepted, then "diverged" at step 0 naming no key (a review, 2026-11-28): typo guards now.
+    ("dam_break", ["fluid.rho0=1e308"], "key 'fluid.rho0': got 1e+308; allowed: a number > 0 and <= 100000"),
+    ("dam_break", ["fluid.viscosity.alpha=1e308"], "key 'fluid.viscosity.alpha': got 1e+308"),
+    ("beam_only", ["structure.time.dt_max=1e-300"], "key 'structure.time.dt_max': got 1e-300"),
     # A participant that cannot start failed the run after its record was created (a review, 2026-11-28).
     ("elastic_gate", ['participants.fluid="/nonexistent/prog --x"'],
      "key 'participants.fluid': the program '/nonexistent/prog' is not an executable file"),
