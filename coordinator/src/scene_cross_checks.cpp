@@ -8,7 +8,6 @@
 #include <cmath>
 #include <vector>
 
-#include "number_text.hpp"
 #include "sphfsi/fluid/schema.hpp"
 
 namespace sphfsi::coordinator {
@@ -66,9 +65,9 @@ void check_structure_in_tank(const Value& fluid, const std::vector<WettedMember>
         for (const auto& [x, y] : m.corners())
             if (x < -x_wall || x > W + x_wall || y < -y_wall || y > H + y_wall) {
                 e.add(&fluid.at("tank"), "key 'structure.members[" + std::to_string(m.index) + "]': its wetted cross-section reaches (" +
-                                             shortest(x) + ", " + shortest(y) + ") m, outside the tank and its walls (x in [" +
-                                             shortest(0.0 - x_wall) + ", " + shortest(W + x_wall) + "], y in [" + shortest(0.0 - y_wall) + ", " +
-                                             shortest(H + y_wall) + "] m" + (periodic.x || periodic.y ? "; a periodic axis's period alone" : "") +
+                                             schema::number_text(x) + ", " + schema::number_text(y) + ") m, outside the tank and its walls (x in [" +
+                                             schema::number_text(0.0 - x_wall) + ", " + schema::number_text(W + x_wall) + "], y in [" + schema::number_text(0.0 - y_wall) + ", " +
+                                             schema::number_text(H + y_wall) + "] m" + (periodic.x || periodic.y ? "; a periodic axis's period alone" : "") +
                                              "); fluid.tank and the structure's geometry disagree");
                 break;
             }
@@ -89,8 +88,8 @@ void check_watchpoints(const Value& points, const std::vector<WettedMember>& wet
         for (const WettedMember& m : wetted)
             if (m.distance(x, y) < nearest->distance(x, y)) nearest = &m;
         if (nearest->distance(x, y) > nearest->cell_size())
-            e.add(&w, key + ": (" + shortest(x) + ", " + shortest(y) + ") m lies " + shortest(nearest->distance(x, y)) +
-                          " m from the wetted structure; allowed: within one interface cell (" + shortest(nearest->cell_size()) +
+            e.add(&w, key + ": (" + schema::number_text(x) + ", " + schema::number_text(y) + ") m lies " + schema::number_text(nearest->distance(x, y)) +
+                          " m from the wetted structure; allowed: within one interface cell (" + schema::number_text(nearest->cell_size()) +
                           " m) of it");
     }
 }

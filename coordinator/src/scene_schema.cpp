@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cctype>
 
-#include "number_text.hpp"
 #include "sphfsi/protocol/codec.hpp"
 #include "sphfsi/coordinator/scene.hpp"
 #include "sphfsi/coordinator/scene_cross_checks.hpp"
@@ -39,9 +38,9 @@ void run_section(schema::TableSchema& s) {
             const bool written = t.at("heartbeat_s").line != 0;
             e.add(written ? &t.at("heartbeat_s") : &t.at("timeout_s"),
                   "key '" + path + (written ? ".heartbeat_s'" : ".timeout_s'") + ": " + path + ".heartbeat_s = " +
-                      shortest(heartbeat) + " s" + (written ? "" : " (the default)") + " must be at most half of " + path +
-                      ".timeout_s = " + shortest(timeout) + " s, or a healthy participant would look dead; allowed: " +
-                      "heartbeat_s <= " + shortest(timeout / 2) + " s, or timeout_s >= " + shortest(2 * heartbeat) + " s");
+                      schema::number_text(heartbeat) + " s" + (written ? "" : " (the default)") + " must be at most half of " + path +
+                      ".timeout_s = " + schema::number_text(timeout) + " s, or a healthy participant would look dead; allowed: " +
+                      "heartbeat_s <= " + schema::number_text(timeout / 2) + " s, or timeout_s >= " + schema::number_text(2 * heartbeat) + " s");
         }
         // Every frame and checkpoint is a window boundary and a write: a run asking for more than this many
         // is a typo (1e-300 for 1e-3), and would crawl while it filled the disk.
@@ -50,7 +49,7 @@ void run_section(schema::TableSchema& s) {
         for (const char* key : {"output_interval", "checkpoint_interval"})
             if (const Value* v = t.find(key); v && end / v->as_double() > kMaxFrames)
                 e.add(v, "key '" + path + "." + key + "': must be at least " + path + ".end_time / 1e6 = " +
-                             shortest(end / kMaxFrames) + " s (at most a million " +
+                             schema::number_text(end / kMaxFrames) + " s (at most a million " +
                              (std::string(key) == "output_interval" ? "frames" : "checkpoints") + " per run)");
     });
 }

@@ -42,10 +42,10 @@ void check_boxes_inside_tank(const Value& fluid, const std::string& path, Errors
             const std::string where = key(path, std::string(list) + "[" + std::to_string(i++) + "]");
             const double x0 = num(b, "x0"), y0 = num(b, "y0"), w = num(b, "width"), h = num(b, "height");
             if (x0 < -slack || y0 < -slack || x0 + w > W + slack || y0 + h > H + slack)
-                errors.add(&b, "key '" + where + "': the box [" + exact(x0) + ", " + exact(x0 + w) +
-                                   "] x [" + exact(y0) + ", " + exact(y0 + h) +
-                                   "] m does not lie inside the tank [0, " + exact(W) + "] x [0, " +
-                                   exact(H) + "] m");
+                errors.add(&b, "key '" + where + "': the box [" + schema::number_text(x0) + ", " + schema::number_text(x0 + w) +
+                                   "] x [" + schema::number_text(y0) + ", " + schema::number_text(y0 + h) +
+                                   "] m does not lie inside the tank [0, " + schema::number_text(W) + "] x [0, " +
+                                   schema::number_text(H) + "] m");
             if (w < dp * (1 - 1e-9) || h < dp * (1 - 1e-9))
                 errors.add(&b, "key '" + where + "': the box is thinner than one particle spacing dp = " + fmt(dp) + " m");
         }
@@ -87,12 +87,12 @@ void check_gate(const Value& fluid, const std::string& path, Errors& errors) {
     const double W = num(tank, "width"), H = num(tank, "height"), dp = num(fluid, "dp");
     const auto [x0, t, h] = gate_box(fluid);
     if (x0 < -slack || x0 + t > W + slack)
-        errors.add(gate, "key '" + key(path, "gate.x0") + "': the gate [" + exact(x0) + ", " + exact(x0 + t) +
-                             "] m does not lie inside the tank [0, " + exact(W) + "] m");
+        errors.add(gate, "key '" + key(path, "gate.x0") + "': the gate [" + schema::number_text(x0) + ", " + schema::number_text(x0 + t) +
+                             "] m does not lie inside the tank [0, " + schema::number_text(W) + "] m");
     if (h > H + slack)
-        errors.add(gate, "key '" + key(path, "gate.height") + "': higher than the tank (" + exact(H) + " m)");
+        errors.add(gate, "key '" + key(path, "gate.height") + "': higher than the tank (" + schema::number_text(H) + " m)");
     if (t < dp * (1 - 1e-9))
-        errors.add(gate, "key '" + key(path, "gate.thickness") + "': thinner than one particle spacing dp = " + exact(dp) + " m");
+        errors.add(gate, "key '" + key(path, "gate.thickness") + "': thinner than one particle spacing dp = " + schema::number_text(dp) + " m");
     if (tank.at("closed_top").as_bool() || periodic_axes(fluid).y)
         errors.add(gate, "key '" + key(path, "gate") + "': the gate stands on the floor and rises out through an open top; "
                                                         "it needs tank.closed_top = false and no periodic y axis");
@@ -165,14 +165,14 @@ void check_combinations(const Value& fluid, const std::string& path, Errors& err
     const auto needed = static_cast<long long>(std::ceil(support / num(fluid, "dp") - 1e-9));
     const bool walled = !(periodic.x && periodic.y);
     if (walled && needed > kMaxWallLayers)
-        errors.add(&fluid.at("h_over_dp"), "key '" + key(path, "h_over_dp") + "': the support radius (" + exact(support) +
+        errors.add(&fluid.at("h_over_dp"), "key '" + key(path, "h_over_dp") + "': the support radius (" + schema::number_text(support) +
                                                " m) needs " + std::to_string(needed) + " wall layers, more than the " +
                                                std::to_string(kMaxWallLayers) + " allowed; allowed with kernel \"" +
                                                fluid.at("kernel").as_string() + "\": h_over_dp <= " +
                                                std::to_string(kMaxWallLayers / kernel_support_factor(fluid.at("kernel").as_string())));
     else if (walled && static_cast<double>(layers) * num(fluid, "dp") < support * (1.0 - 1e-9))
         errors.add(&tank, "key '" + key(path, "tank.wall_layers") + "': " + std::to_string(layers) +
-                              " layers of dp are thinner than the kernel's support radius (" + exact(support) +
+                              " layers of dp are thinner than the kernel's support radius (" + schema::number_text(support) +
                               " m); allowed: at least " + std::to_string(needed));
     if (periodic.y && tank.at("closed_top").as_bool())
         errors.add(&tank, "key '" + key(path, "tank.closed_top") + "': a tank periodic in y has no bottom or top wall");

@@ -14,16 +14,6 @@ namespace {
 std::string join(const std::string& path, const std::string& name) {
     return path.empty() ? name : path + "." + name;
 }
-// Six significant digits where they are the number itself, else every digit it takes to read it back: a refused
-// 1000000.5 printed as "1e+06" beside "allowed: <= 1e+06" (a review, 2026-11-28).
-std::string fmt(double x) {
-    std::ostringstream s;
-    s << x;
-    if (std::strtod(s.str().c_str(), nullptr) == x || !std::isfinite(x)) return s.str();
-    char buf[32];
-    const auto r = std::to_chars(buf, buf + sizeof buf, x);
-    return std::string(buf, r.ptr);
-}
 // A markdown table cell: a literal '|' (as in |residual| or |g|) would end the cell, so it is escaped.
 std::string table_cell(const std::string& text) {
     std::string out;
@@ -38,11 +28,20 @@ std::string quoted_list(const std::vector<std::string>& xs) {
 std::string describe(const Value& v) {
     if (v.is_string()) return "\"" + protocol::printable(v.as_string()) + "\"";  // the sender's text: escaped
     if (v.is_int()) return std::to_string(v.as_int());
-    if (v.is_double()) return fmt(v.as_double());
+    if (v.is_double()) return number_text(v.as_double());
     if (v.is_bool()) return v.as_bool() ? "true" : "false";
     return v.type_name();
 }
 }  // namespace
+
+std::string number_text(double x) {
+    std::ostringstream s;
+    s << x;
+    if (std::strtod(s.str().c_str(), nullptr) == x || !std::isfinite(x)) return s.str();
+    char buf[32];
+    const auto r = std::to_chars(buf, buf + sizeof buf, x);
+    return std::string(buf, r.ptr);
+}
 
 void Errors::add(const Value* at, std::string message) {
     // A check may quote the scene's own text (a name, a path, a refused string). Escaping every message here,
@@ -59,8 +58,8 @@ Field::Field(std::string name, Kind kind, std::string doc)
 
 std::string Field::allowed() const {
     std::string range;
-    if (lo_) range += (lo_open_ ? "> " : ">= ") + fmt(*lo_);
-    if (hi_) range += (range.empty() ? "" : " and ") + std::string(hi_open_ ? "< " : "<= ") + fmt(*hi_);
+    if (lo_) range += (lo_open_ ? "> " : ">= ") + number_text(*lo_);
+    if (hi_) range += (range.empty() ? "" : " and ") + std::string(hi_open_ ? "< " : "<= ") + number_text(*hi_);
     std::string u = unit_.empty() ? "" : " (" + unit_ + ")";
     switch (kind_) {
         case Kind::Number: return "a number" + (range.empty() ? "" : " " + range) + u;

@@ -95,4 +95,9 @@ private:
 // Throws ConfigError listing every problem when `errors` is not empty; `source` prefixes each line.
 void throw_if_any(const Errors& errors, const std::string& source);
 
+// A number in a scene message: six significant digits where they are the number itself, else every digit it
+// takes to read it back (a refused 1000000.5 had printed as "1e+06" beside "allowed: <= 1e+06"; a box 1e-7 m
+// outside the tank as on its edge: a review, 2026-11-28). Every scene check quotes numbers with it.
+std::string number_text(double x);
+
 }  // namespace sphfsi::schema
