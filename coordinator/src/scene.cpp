@@ -14,18 +14,20 @@
 namespace sphfsi::coordinator {
 namespace {
 
-Value from_toml(const toml::node& node, const std::string& path) {
+// `in_file`: the node is the scene file's, so an error names its line (an override's text is "x = ..." on line 1,
+// and apply_override names the --set instead).
+Value from_toml(const toml::node& node, const std::string& path, bool in_file) {
     Value v;
     if (auto t = node.as_table()) {
         Value::Table out;
         for (const auto& [k, child] : *t) {
             std::string key(k.str());
-            out.emplace(key, from_toml(child, path.empty() ? key : path + "." + key));
+            out.emplace(key, from_toml(child, path.empty() ? key : path + "." + key, in_file));
         }
         v = Value(std::move(out));
     } else if (auto a = node.as_array()) {
         Value::Array out;
-        for (const auto& child : *a) out.push_back(from_toml(child, path));
+        for (const auto& child : *a) out.push_back(from_toml(child, path, in_file));
         v = Value(std::move(out));
     } else if (auto s = node.as_string()) {
         v = Value(s->get());
@@ -36,7 +38,8 @@ Value from_toml(const toml::node& node, const std::string& path) {
     } else if (auto b = node.as_boolean()) {
         v = Value(b->get());
     } else {
-        throw ConfigError("key '" + path + "': dates and times are not allowed in scenes");
+        throw ConfigError((in_file ? "line " + std::to_string(node.source().begin.line) + ": " : std::string()) + "key '" +
+                          path + "': dates and times are not allowed in scenes");
     }
     v.line = static_cast<int>(node.source().begin.line);
     return v;
@@ -82,7 +85,9 @@ void apply_override(Value& root, const std::string& assignment) {
     Value v;
     try {
         auto doc = toml::parse("x = " + text);
-        v = from_toml(*doc.get("x"), key);
+        v = from_toml(*doc.get("x"), key, false);
+    } catch (const ConfigError& e) {  // a date: named as the --set it came from, as every other --set error is
+        throw ConfigError("--set " + assignment + ": " + e.what());
     } catch (const toml::parse_error& e) {
         // A bare word such as wcsph is meant as a string; what starts like a number, array, table or quoted
         // string and does not parse (1e400, [1, 2) is a mistake, not a string.
@@ -91,7 +96,11 @@ void apply_override(Value& root, const std::string& assignment) {
         v = Value(text);
     }
     mark_override(v);
-    set_path(root, key, std::move(v));
+    try {
+        set_path(root, key, std::move(v));
+    } catch (const ConfigError& e) {  // no such entry, an array addressed as a table: which --set it was
+        throw ConfigError("--set " + assignment + ": " + e.what());
+    }
 }
 
 std::optional<std::vector<std::string>> Scene::custom_program(std::string_view role) const {
@@ -149,7 +158,7 @@ Scene parse_scene(std::string text, const std::filesystem::path& file, const std
     scene.overrides = overrides;
     Value raw;
     try {
-        raw = from_toml(toml::parse(scene.text, file.string()), "");
+        raw = from_toml(toml::parse(scene.text, file.string()), "", true);
     } catch (const toml::parse_error& e) {
         throw ConfigError(file.string() + ":" + std::to_string(e.source().begin.line) + ": not valid TOML: " +
                           std::string(e.description()));

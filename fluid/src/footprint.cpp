@@ -38,7 +38,8 @@ Footprint estimate_footprint(const sphfsi::Value& fluid) {
     if (const sphfsi::Value* boxes = fluid.find("obstacle"))
         for (const sphfsi::Value& b : boxes->as_array()) f.particles += along(num(b, "width"), dp) * along(num(b, "height"), dp);
     const double row = along(W, dp) + (walls_x ? 2 * layers : 0);
-    f.particles += layers * row * ((floor ? 1 : 0) + (lid ? 1 : 0)) + (walls_x ? 2 * layers * along(H, dp) : 0);
+    f.wall_particles = layers * row * ((floor ? 1 : 0) + (lid ? 1 : 0)) + (walls_x ? 2 * layers * along(H, dp) : 0);
+    f.particles += f.wall_particles;
     if (fluid.find("gate")) {
         const GateBox g = gate_box(fluid);
         f.particles += along(g.thickness, dp) * along(g.height, dp);

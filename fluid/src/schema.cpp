@@ -230,12 +230,21 @@ void check_footprint(const Value& fluid, const std::string& path, Errors& errors
     if (over_count > 1.0) why += "; particle ids are 32-bit (at most " + sci(kMaxParticles) + " particles)";
     if (over_cells > 1.0) why += "; grid cell indices are 32-bit (at most " + sci(kMaxCells) + " cells)";
     const double dp = num(fluid, "dp");
-    // The water's area dominates what a fine spacing lays out: the count goes as 1/dp^2.
+    // The water's area dominates what a fine spacing lays out: the count goes as 1/dp^2. Where the tank's
+    // walls or its grid cells dominate instead (a tank far larger than its water, often a typo in its size),
+    // the tank is the key to name too: "dp" alone sent the reader to the wrong line (a review, 2026-11-28).
+    const bool tank_dominates = f.wall_particles > 0.5 * f.particles || over_cells > std::max(over_memory, over_count);
+    const Value& tank = fluid.at("tank");
+    const std::string tank_too = tank_dominates ? ", or a smaller tank ('" + key(path, "tank") + "' is " +
+                                                      schema::number_text(num(tank, "width")) + " m by " +
+                                                      schema::number_text(num(tank, "height")) +
+                                                      " m; its walls and grid cells are most of this)"
+                                                : std::string();
     errors.add(&fluid.at("dp"), "key '" + key(path, "dp") + "': " + sci(dp) + " m lays out about " + sci(f.particles) +
                                     " particles (and " + sci(f.cells) + " grid cells), about " + sci(f.bytes() / 1e9) +
                                     " GB at " + sci(kBytesPerParticle) + " B a particle" + why +
                                     "; allowed: dp of about " + sci(dp * std::sqrt(std::max({over_memory, over_count, over_cells})) * 1.01) +
-                                    " m or more for this geometry");
+                                    " m or more for this geometry" + tank_too);
 }
 
 TableSchema build() {

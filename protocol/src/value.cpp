@@ -122,9 +122,22 @@ void set_path(Value& root, std::string_view dotted, Value v) {
         auto& table = node->as_table_mut();
         Value* child = &table[step.key];
         if (step.index >= 0) {  // an entry of an array of tables, e.g. [[structure.members]]
-            if (!child->is_array() || static_cast<std::size_t>(step.index) >= child->as_array().size())
-                throw ConfigError("'" + std::string(whole) + "': there is no entry " + std::to_string(step.index) + " of '" +
-                                  step.key + "'");
+            // Which entries there are, or that there is no array to index: "no entry 0 of 'boxes'" read as if
+            // 'boxes' existed (a review, 2026-11-28). An entry is changed here, never added.
+            const std::string array = std::string(whole.substr(0, whole.size() - dotted.size())) + step.key;
+            if (child->is_null())
+                throw ConfigError("'" + std::string(whole) + "': there is no '" + array + "' to take entry " +
+                                  std::to_string(step.index) + " of");
+            if (!child->is_array())
+                throw ConfigError("'" + std::string(whole) + "': '" + array + "' is " + child->type_name() +
+                                  ", not an array to take entry " + std::to_string(step.index) + " of");
+            const std::size_t n = child->as_array().size();
+            if (static_cast<std::size_t>(step.index) >= n)
+                throw ConfigError("'" + std::string(whole) + "': '" + array + "' has " +
+                                  (n == 0 ? std::string("no entries") :
+                                   n == 1 ? std::string("one entry, ") + array + "[0]" :
+                                            std::to_string(n) + " entries, " + array + "[0] to " + array + "[" +
+                                                std::to_string(n - 1) + "]"));
             child = &child->as_array_mut()[static_cast<std::size_t>(step.index)];
         }
         if (dot == std::string_view::npos) {

@@ -210,6 +210,12 @@ TEST_SUITE("scene") {
         CHECK(p.find("key 'fluid.dp': 1e-07 m lays out about 2e+12 particles") != std::string::npos);
         CHECK(p.find("particle ids are 32-bit") != std::string::npos);
         CHECK(p.find("allowed: dp of about") != std::string::npos);
+        CHECK(p.find("or a smaller tank") == std::string::npos);  // the water is what is too fine here
+        // A tank far larger than its water (a typo in its size): its walls and cells are the cost, and the
+        // error names the tank as well as dp (it named dp alone: a review, 2026-11-28).
+        const std::string big = problems(with(dam_break(0.004), {{"tank.width", 3000.0}, {"tank.height", 3000.0}}));
+        CHECK(big.find("key 'fluid.dp': 0.004 m lays out") != std::string::npos);
+        CHECK(big.find("or a smaller tank ('fluid.tank' is 3000 m by 3000 m") != std::string::npos);
     }
 
     // What the periodic wrap must keep: every particle inside the period and none through a wall, while the water

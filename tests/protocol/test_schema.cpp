@@ -123,7 +123,17 @@ TEST_CASE("dotted paths reach into tables and arrays of tables") {
     CHECK(find_path(root, "structure.members[1].n")->as_int() == 9);
     CHECK(find_path(root, "structure.members[0].n")->as_int() == 3);
     CHECK(find_path(root, "structure.members[5].n") == nullptr);
-    CHECK_THROWS_AS(set_path(root, "structure.members[5].n", Value(1)), ConfigError);
+    // An entry is changed, never added: the error says which entries there are, or that there is no array.
+    CHECK_THROWS_WITH_AS(set_path(root, "structure.members[5].n", Value(1)),
+                         doctest::Contains("'structure.members' has 2 entries, structure.members[0] to structure.members[1]"),
+                         ConfigError);
+    CHECK_THROWS_WITH_AS(set_path(root, "structure.loads[0].n", Value(1)),
+                         doctest::Contains("there is no 'structure.loads' to take entry 0 of"), ConfigError);
+    CHECK_THROWS_WITH_AS(set_path(root, "fluid.dp[0]", Value(1)),
+                         doctest::Contains("'fluid.dp' is a float, not an array to take entry 0 of"), ConfigError);
+    set_path(root, "structure.none", Value(Value::Array{}));
+    CHECK_THROWS_WITH_AS(set_path(root, "structure.none[0].n", Value(1)),
+                         doctest::Contains("'structure.none' has no entries"), ConfigError);
     CHECK_THROWS_AS(set_path(root, "structure.members[x].n", Value(1)), ConfigError);
     // An index too large for any array, and an array addressed as a table, are named (both used to escape
     // as std::out_of_range from std::stol, or as a type error that named no key).

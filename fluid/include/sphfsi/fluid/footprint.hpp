@@ -17,6 +17,7 @@ constexpr double kMaxParticles = 2147483647.0;
 
 struct Footprint {
     double particles = 0;  // fluid, tank walls, obstacles and gate, as the lattice lays them out
+    double wall_particles = 0;  // of which the tank's walls
     double cells = 0;      // neighbour-grid cells over the tank, its walls and the head room above an open top
     double bytes() const { return particles * kBytesPerParticle + cells * kBytesPerCell; }
 };
