@@ -24,12 +24,18 @@ void ResumeCopy::begin(const std::filesystem::path& file) {
 }
 
 void ResumeCopy::replace(const std::filesystem::path& file) {
-    std::filesystem::rename(copy_, file);
+    std::error_code ec;
+    std::filesystem::rename(copy_, file, ec);
+    if (ec) {
+        rename_failed_ = true;
+        throw std::runtime_error("cannot rename the resumed run's copy " + copy_.string() + " over " + file.string() +
+                                 ": " + ec.message());
+    }
     copy_.clear();
 }
 
 void ResumeCopy::abandon() {
-    std::filesystem::remove(copy_);
+    if (!rename_failed_) std::filesystem::remove(copy_);
     copy_.clear();
 }
 

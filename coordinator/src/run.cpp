@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <exception>
 #include <fstream>
 #include <iostream>
 #include <limits>
@@ -101,9 +102,21 @@ private:
     double structure_alone_step() const;
     // A resume's copies replace record.h5 and watchpoints.csv, each once the run has reached the time that file
     // ends at: until then it holds more than its copy, and a resume that stops must leave it.
+    // Each is tried even when the other fails (the first failure is rethrown): a record that could not be
+    // renamed must not also cost the watchpoints' copy, which the clean-up would remove as stopped short.
     void take_over_when_caught_up(double t) {
-        recorder_->take_over_when_caught_up(t);
-        if (watchpoints_) watchpoints_->take_over_when_caught_up(t);
+        std::exception_ptr failed;
+        try {
+            recorder_->take_over_when_caught_up(t);
+        } catch (...) {
+            failed = std::current_exception();
+        }
+        if (watchpoints_) try {
+                watchpoints_->take_over_when_caught_up(t);
+            } catch (...) {
+                if (!failed) failed = std::current_exception();
+            }
+        if (failed) std::rethrow_exception(failed);
     }
     void record_window(const WindowPlan& plan, const WindowOutcome& o, double wall_s, const InterfaceWork& work);
     void snapshot_all();
@@ -279,15 +292,25 @@ int Runner::execute() {
         } catch (const std::exception& e) {
             log(std::string("error: ") + e.what());
         }
+        // A copy that caught up and could not be renamed holds the whole run: it is kept, and said so.
+        const auto kept = [&](const std::string& name) {
+            log("the resumed run's copy could not replace " + name + ", which is left as the interrupted run left it; " +
+                "the copy, with everything to t = " + std::to_string(t_) + " s, is kept as " + name +
+                ".resuming (rename it over " + name + " to use it)");
+        };
         if (recorder_->resume_pending()) {
-            log("the resumed run stopped at t = " + std::to_string(t_) + " s, before t = " +
-                std::to_string(recorder_->history_end()) + " s, where the interrupted run's record ends: " +
-                recorder_->file().filename().string() + " is left as that run left it");
+            if (recorder_->resume_rename_failed()) kept(recorder_->file().filename().string());
+            else
+                log("the resumed run stopped at t = " + std::to_string(t_) + " s, before t = " +
+                    std::to_string(recorder_->history_end()) + " s, where the interrupted run's record ends: " +
+                    recorder_->file().filename().string() + " is left as that run left it");
             recorder_->abandon_resume();
         }
         if (watchpoints_ && watchpoints_->resume_pending()) {
-            log("the resumed run stopped before t = " + std::to_string(watchpoints_->history_end()) +
-                " s, where the interrupted run's watchpoints.csv ends: it is left as that run left it");
+            if (watchpoints_->resume_rename_failed()) kept("watchpoints.csv");
+            else
+                log("the resumed run stopped before t = " + std::to_string(watchpoints_->history_end()) +
+                    " s, where the interrupted run's watchpoints.csv ends: it is left as that run left it");
             watchpoints_->abandon_resume();
         }
     }

@@ -7,9 +7,11 @@
  * Preloaded into sphfsi by integration.resume, it stops the coordinator at a rename instead: just before
  * (SPHFSI_KILL_AT_RENAME_WHEN=before) or just after (the default) the N-th rename (N =
  * $SPHFSI_KILL_AT_RENAME_COUNT, default 1) onto a path ending in $SPHFSI_KILL_AT_RENAME_TO, such as the
- * publishing of checkpoint.bin. */
+ * publishing of checkpoint.bin. With SPHFSI_KILL_AT_RENAME_WHEN=fail that rename fails instead (EIO, nothing
+ * renamed) and the process goes on. */
 #define _GNU_SOURCE
 #include <dlfcn.h>
+#include <errno.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -53,6 +55,10 @@ int rename(const char* from, const char* to) {
     const size_t n = strlen(to), k = suffix ? strlen(suffix) : 0;
     const int chosen = suffix && n >= k && strcmp(to + n - k, suffix) == 0 && ++seen == (count ? atol(count) : 1);
     const int before = when && strcmp(when, "before") == 0;
+    if (chosen && when && strcmp(when, "fail") == 0) {
+        errno = EIO;
+        return -1;
+    }
     if (chosen && before) raise(SIGKILL);
     const int done = real(from, to);
     if (chosen) raise(SIGKILL);

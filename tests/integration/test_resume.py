@@ -254,6 +254,37 @@ def killed_at_a_rename(args, to, count, when, timeout=60):
     assert p.returncode == -signal.SIGKILL, (p.returncode, p.stderr)
 
 
+def test_a_resumed_copy_that_cannot_take_over_is_kept():
+    """A resume whose copy has caught up with record.h5 and cannot be renamed over it (here the rename fails
+    with EIO) holds all of the run in that copy; the run stops there. The rename was tried a second time,
+    logged twice, and the copy then removed as if the run had stopped short of the interrupted record (a
+    review, 2026-11-28). Now the failure is the status, said once, the copy is kept as record.h5.resuming and
+    named, the watchpoints' copy still takes over, and record.h5 is as the interrupted run left it."""
+    out = kill_after_first_checkpoint(SCENE, SETTINGS, "resume-rename-fails")
+    record = os.path.join(out, "record.h5")
+    before = os.stat(record).st_ino
+    env = dict(os.environ, LD_PRELOAD=os.path.join(harness.BIN, "kill_at_write.so"), SPHFSI_KILL_AT_RENAME_TO="record.h5",
+               SPHFSI_KILL_AT_RENAME_WHEN="fail")
+    p = subprocess.run([os.path.join(harness.BIN, "sphfsi"), "run", "--resume", out, "--quiet"], capture_output=True,
+                       text=True, env=env, timeout=240)
+    assert p.returncode == 1 and "cannot rename the resumed run's copy" in p.stderr, (p.returncode, p.stderr)
+    with open(os.path.join(out, "run.log")) as f:
+        log = f.read()
+    assert log.count("cannot rename the resumed run's copy") == 1, log
+    assert "is kept as record.h5.resuming" in log and "before t =" not in log, log
+    assert os.stat(record).st_ino == before
+    with harness.record(record) as f:
+        assert f.attrs["status"] == "running", f.attrs["status"]  # as the kill left it
+        interrupted_end = f["windows/t"][-1]
+    with harness.record(record + ".resuming") as f:
+        assert f.attrs["status"].startswith("failed: cannot rename the resumed run's copy"), f.attrs["status"]
+        end = f["windows/t"][-1]
+        assert end >= interrupted_end - 1e-12, (end, interrupted_end)  # all of the interrupted record, and on
+    assert not os.path.exists(os.path.join(out, "watchpoints.csv.resuming"))
+    with open(os.path.join(out, "watchpoints.csv")) as f:
+        assert abs(float(f.read().strip().splitlines()[-1].split(",")[0]) - end) < 1e-9
+
+
 def test_a_checkpoint_is_published_only_after_the_resumed_copy_took_over():
     """The interrupted run is killed just before it publishes its checkpoint at 0.15 s, so its record ends at
     0.15 s and its checkpoint says 0.1 s. The resume catches up at 0.15 s; it is killed just after it

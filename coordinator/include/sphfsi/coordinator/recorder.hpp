@@ -58,8 +58,10 @@ public:
     // sidecar is written then: until then it describes the interrupted record).
     void take_over_when_caught_up(double t);
     bool resume_pending() const { return resuming_.pending(); }
+    bool resume_rename_failed() const { return resuming_.rename_failed(); }
     double history_end() const { return resuming_.end(); }
-    // Removes a resume's copy that has not replaced `file`, which stays as the interrupted run left it.
+    // Closes and removes a resume's copy that has not replaced `file`, which stays as the interrupted run left
+    // it; a copy whose rename failed is closed and kept (ResumeCopy::abandon).
     void abandon_resume();
 
     // Throws RecordRefused, writing nothing, on an `info` key that is not a plain name (see append_frame).

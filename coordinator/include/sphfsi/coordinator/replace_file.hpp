@@ -19,13 +19,19 @@ public:
     bool pending() const { return !copy_.empty(); }
     const std::filesystem::path& path() const { return copy_; }
     double end() const { return end_; }
-    bool caught_up(double t) const { return pending() && t >= end_ * (1 - 1e-12); }
-    void replace(const std::filesystem::path& file);  // renames the copy over FILE; an open handle follows it
-    void abandon();                                    // removes the copy, FILE stays
+    // A copy whose rename failed is not tried again (it was, and each failure was logged twice).
+    bool caught_up(double t) const { return pending() && !rename_failed_ && t >= end_ * (1 - 1e-12); }
+    bool rename_failed() const { return rename_failed_; }
+    // Renames the copy over FILE (an open handle follows it); throws std::runtime_error naming both if it cannot.
+    void replace(const std::filesystem::path& file);
+    // Removes the copy, FILE stays; except a copy whose rename failed, which holds the whole run and is kept
+    // where it is (it was removed as if the run had stopped short: a review, 2026-11-28).
+    void abandon();
 
 private:
     std::filesystem::path copy_;
     double end_ = 0.0;
+    bool rename_failed_ = false;
 };
 
 }  // namespace sphfsi::coordinator

@@ -26,8 +26,10 @@ public:
     // run ahead of the record's, which is flushed at frames only).
     void take_over_when_caught_up(double t);
     bool resume_pending() const { return resuming_.pending(); }
+    bool resume_rename_failed() const { return resuming_.rename_failed(); }
     double history_end() const { return resuming_.end(); }
-    // Removes a resume's FILE.resuming that has not replaced the file, which stays as it was.
+    // Closes and removes a resume's FILE.resuming that has not replaced the file, which stays as it was (one
+    // whose rename failed is kept: ResumeCopy::abandon).
     void abandon_resume();
 
 private:
