@@ -332,7 +332,10 @@ TableSchema build() {
         .at_least(-1e9).at_most(1e9).fallback(0.0);
     pressure.boolean("clamp_negative",
                      "set negative fluid pressures to zero (stops free-surface particles from pulling together, "
-                     "which summation densities would otherwise cause)")
+                     "which summation densities would otherwise cause); Adami walls follow it. Off, the walls pull "
+                     "where the fluid is under tension and draw it towards their surface (a full closed box under "
+                     "gravity pointing up: the bottom row moved 0.4 - 0.6 dp towards the floor in 0.1 s); PCISPH "
+                     "off cannot run with a free surface (its deficit counts as expansion)")
         .fallback(true);
     pressure.boolean("kernel_correction",
                      "correct each pair's kernel gradient in the pressure term by the mean of the two particles' "

@@ -192,8 +192,10 @@ double Simulation2D::step_pcisph(double dt, double t_after, bool adaptive, Windo
             }
         }
         const PcisphOutcome out = with_kernels<Dim>(s_.kernel, h_, [&](const auto& kw, const auto& kg) {
+            // The walls follow clamp_negative as the fluid's pressures do (and as every other model's walls do):
+            // they were clamped here whatever the scene said (a review, 2026-11-28).
             return pcisph_solve(P, grid_, kw, kg, pcisph_, dt, pci_, [&] {
-                extrapolate_boundary_state(P, grid_, kw, rates_.gravity, true, [&](double) { return s_.rho0; },
+                extrapolate_boundary_state(P, grid_, kw, rates_.gravity, s_.clamp_negative, [&](double) { return s_.rho0; },
                                            [&](std::uint32_t w) { return boundary_acceleration(w); });
             });
         });

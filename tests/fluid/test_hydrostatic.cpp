@@ -185,6 +185,38 @@ TEST_SUITE("hydrostatic") {
         CHECK(std::abs(mean - 1.0) < 0.02);
     }
 
+    // Adami walls take the extrapolated pressure of the fluid beside them, clamped at zero only where the
+    // fluid's is (pressure.clamp_negative), in PCISPH's solve as in the other models: PCISPH's walls were
+    // clamped whatever the scene said (a review, 2026-11-28). A closed box full of water (no free surface,
+    // which unclamped PCISPH counts as a 25 % expansion and cannot run) under gravity pointing up: held by
+    // its lid, the water's pressure falls towards the floor and is below zero there. Clamped, nothing pulls
+    // and the bottom row stays within 0.2 dp of its place for 0.1 s (measured: WCSPH 0.09, PCISPH 0.16 dp
+    // away from the floor). Unclamped, the floor pulls on it and draws it towards the wall surface, in both
+    // models alike (measured: WCSPH from 0.50 to 0.07 dp above the floor, PCISPH to -0.06 dp; PCISPH with
+    // its walls clamped in the solve stayed at 0.52 dp, unlike every other model). So the test: clamped,
+    // both models' bottom rows stay (0.2 dp); unclamped, both come within 0.2 dp of the floor's surface.
+    // This is the tension SPH walls share (docs/scenes.md, pressure.clamp_negative), not a reference value.
+    TEST_CASE("PCISPH: wall pressures follow clamp_negative as WCSPH's do") {
+        const double dp = 0.0025;
+        for (const bool clamp : {true, false})
+            for (const bool pci : {true, false}) {
+                CAPTURE(clamp);
+                CAPTURE(pci);
+                const Value box = with(water_tank(dp, 0.1, 0.05, 0.1, 0.05), {{"tank.closed_top", true}});
+                auto solver = start(with(pci ? pcisph(box) : wcsph(box),
+                                         {{"gravity", vec2(0.0, 9.81)}, {"pressure.clamp_negative", clamp}}));
+                run(*solver, 0.1, 0.01);
+                const auto& P = solver->simulation().particles();
+                double lowest = 1.0;
+                for (std::size_t i = 0; i < P.size(); ++i)
+                    if (P.kind[i] == Kind::Fluid) lowest = std::min(lowest, P.x[i][1]);
+                MESSAGE(std::string(pci ? "PCISPH" : "WCSPH") << ", clamp_negative = " << clamp << ": lowest fluid centre "
+                                                   << lowest / dp << " dp above the floor after 0.1 s (from 0.5)");
+                if (clamp) CHECK(std::abs(lowest / dp - 0.5) < 0.2);
+                else CHECK(lowest / dp < 0.2);
+            }
+    }
+
     // Summed densities weigh neighbours with rho0 over the initial lattice's kernel sum (Simulation2D), so
     // water resting on its initial lattice is at rho0, not at the lattice's quadrature of the kernel
     // integral (1.0051 rho0 for Wendland at h = 1.5 dp, which standard SPH at k = 1000 m^2/s^2 read as
