@@ -140,7 +140,12 @@ Handle create_file(const std::string& path, unsigned chunk_index_k) {
     check(H5Pset_local_heap_size_hint(fcpl.get(), kNameHeapBytes), "size the root group's name heap", 0);
     check(H5Pset_file_space_strategy(fcpl.get(), H5F_FSPACE_STRATEGY_NONE, 0, 1), "set the file space strategy", 0);
     if (chunk_index_k) check(H5Pset_istore_k(fcpl.get(), chunk_index_k), "set the chunk index size", 0);
-    return Handle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()), H5Fclose, "create " + path);
+    // With the cause where the driver saw one (a full disk, no permission): "cannot create" alone left the
+    // reader guessing (a review, 2026-11-28).
+    const hid_t id = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get());
+    if (id < 0 && !ordered_file_failure().empty())
+        throw std::runtime_error("HDF5: cannot create " + path + " (" + ordered_file_failure() + ")");
+    return Handle(id, H5Fclose, "create " + path);
 }
 
 void flush(hid_t file) {

@@ -162,7 +162,7 @@ H5FD_t* open_file(const char* name, unsigned flags, hid_t, haddr_t) {
     if (flags & H5F_ACC_EXCL) mode |= O_EXCL;
     const int fd = ::open(name, mode | O_CLOEXEC, 0666);  // not inherited by the participants we start
     struct stat st;
-    if (fd < 0) return nullptr;
+    if (fd < 0) return nullptr;  // not a failure to report: HDF5 probes for files that need not exist
     if (fstat(fd, &st) != 0) {
         ::close(fd);
         return nullptr;

@@ -250,20 +250,41 @@ int Runner::execute() {
     }
     const double loop_cpu = loop_cpu_so_far(), loop_wall = loop_wall_so_far();
     progress_finish();
+    // Why the run stopped goes on file before the shutdown, which takes seconds (goodbye, then waiting for
+    // the participants to exit): a kill in those seconds left "running" on file with the cause known (a
+    // review, 2026-11-28). Written again, final, below; a failure to write it here is reported there.
+    if (code != 0) try {
+            recorder_->set_status(status);
+        } catch (const std::exception&) {
+        }
     if (hub_) hub_->goodbye(code == 0 ? 5.0 : 1.0);
     if (launcher_)
         for (const auto& note : launcher_->stop_all(code == 0 ? 2.0 : 0.5)) log("shutdown: " + note);
-    double cpu = cpu_seconds();
-    recorder_->set_number("coordinator_cpu_s", cpu);
-    recorder_->set_number("wall_s", wall_in_loop_s_);
-    recorder_->set_number("messaging_and_waiting_s", messaging_total_s_);
-    recorder_->set_number("loop_wall_s", loop_wall);
-    recorder_->set_number("coordinator_loop_cpu_s", loop_cpu);
-    if (coupled_) {
-        recorder_->set_number("interface_work", iface_.work_total);
-        recorder_->set_number("interface_energy_created", iface_.created_total);
+    // From here on a write that fails (a full disk) is the run's failure, and the status and the clean-up
+    // below still follow: escaping, it skipped both, leaving "running" on file and a resume's copies behind
+    // (a review, 2026-11-28).
+    const auto failed_here = [&](const std::exception& e) {
+        if (status.find(e.what()) == std::string::npos) log(std::string("error: ") + e.what());  // once
+        if (code == 0) {  // else the run had already stopped, and that stays its cause
+            status = std::string("failed: ") + e.what();
+            code = 1;
+        }
+    };
+    try {
+        double cpu = cpu_seconds();
+        recorder_->set_number("coordinator_cpu_s", cpu);
+        recorder_->set_number("wall_s", wall_in_loop_s_);
+        recorder_->set_number("messaging_and_waiting_s", messaging_total_s_);
+        recorder_->set_number("loop_wall_s", loop_wall);
+        recorder_->set_number("coordinator_loop_cpu_s", loop_cpu);
+        if (coupled_) {
+            recorder_->set_number("interface_work", iface_.work_total);
+            recorder_->set_number("interface_energy_created", iface_.created_total);
+        }
+        if (watchpoints_) watchpoints_->flush();
+    } catch (const std::exception& e) {
+        failed_here(e);
     }
-    if (watchpoints_) watchpoints_->flush();
     if (code == 0) {
         // A completed resume replaces the interrupted files whatever time they reached, before its status is
         // set: the status and the sidecar written with it are then the final record's. The sidecar was written
@@ -277,10 +298,14 @@ int Runner::execute() {
             code = 1;
         }
     }
-    if (const std::string written = recorder_->set_status(status); written != status) {  // after every row and total above
-        log("error: " + written.substr(std::string("failed: ").size()));
-        status = written;
-        code = 1;
+    try {
+        if (const std::string written = recorder_->set_status(status); written != status) {  // after every row and total above
+            log("error: " + written.substr(std::string("failed: ").size()));
+            status = written;
+            code = 1;
+        }
+    } catch (const std::exception& e) {
+        failed_here(e);
     }
     if (code != 0) {
         // A resume that reached the interrupted record's end holds all of it and then this stop: its copy

@@ -2,7 +2,8 @@
  * K-th write to a file (K = $SPHFSI_KILL_AT_WRITE), so a test can stop a recording between any two of the
  * writes the recorder makes, one after another, instead of hoping a timed kill lands in a flush. Writes
  * are pwrite; the file is sized with ftruncate and fallocate: all three count. At exit, without a kill, it
- * prints how many there were ("writes: N") on stderr.
+ * prints how many there were ("writes: N") on stderr. With SPHFSI_FAIL_WRITES_FROM=K it does not kill: the
+ * K-th write and every later one fail with ENOSPC, as on a disk that has just filled.
  *
  * Preloaded into sphfsi by integration.resume, it stops the coordinator at a rename instead: just before
  * (SPHFSI_KILL_AT_RENAME_WHEN=before) or just after (the default) the N-th rename (N =
@@ -21,20 +22,28 @@
 
 static long writes;
 
-static void count_and_maybe_die(void) {
-    static long kill_at = -1;
+/* Counts the write; 1 if it is to fail (errno is then ENOSPC). */
+static int count_and_maybe_die(void) {
+    static long kill_at = -1, fail_from = -1;
     if (kill_at < 0) {
         const char* k = getenv("SPHFSI_KILL_AT_WRITE");
+        const char* f = getenv("SPHFSI_FAIL_WRITES_FROM");
         kill_at = k ? atol(k) : 0;
+        fail_from = f ? atol(f) : 0;
     }
     if (++writes == kill_at) raise(SIGKILL);
+    if (fail_from > 0 && writes >= fail_from) {
+        errno = ENOSPC;
+        return 1;
+    }
+    return 0;
 }
 
 #define FORWARD(name, ret, params, args)                                   \
     ret name params {                                                      \
         static ret(*real) params;                                          \
         if (!real) real = (ret(*) params)dlsym(RTLD_NEXT, #name);          \
-        count_and_maybe_die();                                             \
+        if (count_and_maybe_die()) return -1;                              \
         return real args;                                                  \
     }
 

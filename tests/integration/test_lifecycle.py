@@ -237,6 +237,25 @@ def test_stopped_participant_is_named_and_reaped():
     assert not harness.pid_alive(pid), "the stopped participant was left behind"
 
 
+def test_the_cause_is_on_file_before_the_shutdown_ends():
+    """The coordinator names a stopped participant, then spends seconds shutting down (goodbye, then waiting
+    for the participants to exit). The status used to be written only after that, so a SIGKILL in those
+    seconds left "running" on file with the cause known (a review, 2026-11-28; seen so). Killed 0.3 s after
+    it named the participant, the record must say why."""
+    run, out, pid = start_long("sigstop-then-kill")
+    time.sleep(0.5)
+    os.kill(pid, signal.SIGSTOP)
+    run.wait_for("structure has been silent for", timeout=3.0 + SLACK_S + 5)
+    time.sleep(0.3)
+    assert run.proc.poll() is None, "the coordinator had already exited: nothing was tested"
+    run.proc.send_signal(signal.SIGKILL)
+    run.proc.wait(timeout=10)
+    if harness.pid_alive(pid):
+        os.kill(pid, signal.SIGKILL)  # the coordinator cannot reap it now
+    with harness.record(os.path.join(out, "record.h5")) as f:
+        assert f.attrs["status"].startswith("failed: structure has been silent for"), f.attrs["status"]
+
+
 def test_killed_participant_is_named():
     run, out, pid = start_long("sigkill-participant")
     time.sleep(0.5)
@@ -363,6 +382,8 @@ def test_a_sidecar_that_cannot_be_written_stops_the_run():
     code, text = harness.sphfsi("run", scene, "--out", out, "--quiet", "--set", "run.end_time=0.02", "--set",
                                 "run.output_interval=0.01", timeout=60)
     assert code == 1 and "cannot write the XDMF sidecar" in text, (code, text)
+    assert "record.xdmf.tmp (Is a directory)" in text, text  # the cause (missing until 2026-11-28)
+    assert os.path.isdir(os.path.join(out, "record.xdmf.tmp"))  # what stood there is not ours to remove
     with harness.record(os.path.join(out, "record.h5")) as f:
         assert f.attrs["status"].startswith("failed: cannot write the XDMF sidecar"), f.attrs["status"]
         assert len(f["frames/fluid/time"]) >= 1

@@ -285,6 +285,41 @@ def test_a_resumed_copy_that_cannot_take_over_is_kept():
         assert abs(float(f.read().strip().splitlines()[-1].split(",")[0]) - end) < 1e-9
 
 
+def test_a_resume_on_a_disk_that_fills_leaves_the_record_as_it_was():
+    """A resume whose writes start failing with ENOSPC (kill_at_write.so's SPHFSI_FAIL_WRITES_FROM, half way
+    through the writes a whole resume makes) before it has caught up: record.h5 stays byte for byte as the
+    interrupted run left it, its copy is removed, and both the cause and what was left are said, once. The
+    root totals and the status written after the stop failed too and escaped: the copy stayed behind on the
+    full disk, with no word of it, and the cause was printed twice (a review, 2026-11-28; seen so). The
+    interrupted record's last window is moved to 0.25 s, past the resumed run's end, so the copy never
+    catches up and wherever the failure falls it is pending; a resume with room then completes."""
+    out = harness.out_dir("resume-disk-full")
+    killed_at_a_rename(["run", SCENE, "--out", out, "--quiet", "--set", "run.end_time=0.2", "--set",
+                        "run.checkpoint_interval=0.05", "--set", "run.output_interval=0.01"], "checkpoint.bin", 3, "before")
+    import h5py
+    with h5py.File(os.path.join(out, "record.h5"), "r+", locking=False) as f:
+        f["windows/t"][-1] = 0.25
+    dry = out + "-dry"
+    shutil.copytree(out, dry)
+    shim = dict(os.environ, LD_PRELOAD=os.path.join(harness.BIN, "kill_at_write.so"))
+    p = subprocess.run([os.path.join(harness.BIN, "sphfsi"), "run", "--resume", dry, "--quiet"], capture_output=True,
+                       text=True, env=shim, timeout=60)
+    assert p.returncode == 0, p.stderr
+    writes = max(int(line.split()[1]) for line in p.stderr.splitlines() if line.startswith("writes: "))
+    with open(os.path.join(out, "record.h5"), "rb") as f:
+        before = f.read()
+    p = subprocess.run([os.path.join(harness.BIN, "sphfsi"), "run", "--resume", out, "--quiet"], capture_output=True,
+                       text=True, env=dict(shim, SPHFSI_FAIL_WRITES_FROM=str(writes // 2)), timeout=60)
+    print(f"a whole resume makes {writes} writes; failing from write {writes // 2}: exit {p.returncode}")
+    assert p.returncode == 1 and p.stderr.count("No space left on device") == 1, (p.returncode, p.stderr)
+    assert "record.h5 is left as that run left it" in p.stderr, p.stderr
+    assert not [n for n in os.listdir(out) if n.endswith(".resuming")], os.listdir(out)
+    with open(os.path.join(out, "record.h5"), "rb") as f:
+        assert f.read() == before
+    code, text = harness.sphfsi("run", "--resume", out, "--quiet", timeout=60)
+    assert code == 0, text
+
+
 def test_a_checkpoint_is_published_only_after_the_resumed_copy_took_over():
     """The interrupted run is killed just before it publishes its checkpoint at 0.15 s, so its record ends at
     0.15 s and its checkpoint says 0.1 s. The resume catches up at 0.15 s; it is killed just after it
