@@ -78,7 +78,10 @@ void Simulation2D::sum_densities(const KernelW& kw, bool cspm) {
 void Simulation2D::reinitialise_densities() {
     // Integrated densities drift away from what the particles' spacing says over long runs (the wind basin's
     // lee-wall ridge, docs/validation.md): replace them by the CSPM sums of the positions now held, fluid and,
-    // in the dummy model (whose walls integrate densities too), boundary particles. The step's rates belong to
+    // in the dummy model (whose walls integrate densities too), boundary particles. CSPM, not the plain
+    // sums, although it is the lower of the two in the surface's second and third rows (density_summation.hpp):
+    // re-initialised from plain sums the wind basin's profile was 3.0 % off over t = 6 - 8 s, against 1.9 %
+    // (docs/validation.md, "Wind-driven closed basin"). The step's rates belong to
     // the old densities, so the next step evaluates afresh. Checkpoints keep the step count: a resumed run
     // re-initialises at the same steps.
     move_solids(st_.t);

@@ -1,12 +1,17 @@
 #pragma once
 // Density by summation, rho_i = m sum_j W_ij (self included), optionally Shepard (CSPM) normalised:
 // rho_i = m sum_j W_ij / sum_j V_j W_ij with the particle volumes V_j = m / rho~_j of the plain sums rho~ of
-// the same positions (Chen et al. 1999; Randles & Libersky 1996). The normalisation removes the kernel
-// truncation deficit at a free surface (to first order), while the plain sums inside it keep the response
-// to compression. (Normalising with the previous step's densities instead would make the density blind to
-// compression: particles squeezed together would raise numerator and denominator alike.) On a uniform
-// lattice both forms give m sum_j W_ij, so `mass` is the summation mass (Simulation2D: rho0 over the kernel
-// sum of the initial lattice), with which that is exactly rho0.
+// the same positions (Chen et al. 1999; Randles & Libersky 1996). With volumes from the same positions the
+// mass cancels: rho_i = sum_j W_ij / sum_j (W_ij / rho~_j), a kernel-weighted harmonic mean of the
+// neighbours' plain sums. It cannot exceed the largest of them, so it does not remove the kernel truncation
+// deficit at a free surface; it spreads it over the top rows. A flat lattice (Wendland, h = 1.5 dp, the bulk
+// at rho0 = 1000): plain sums 747.8, 980.6 and 1000.0 in the top three rows, Shepard's 813.2, 917.4 and
+// 989.0; beside a wall's outer layer 999.6 (a review, 2026-11-28, which found that an earlier version of
+// this header claimed the deficit removed "to first order"). It smooths the sums; the plain sums keep the
+// response to compression inside. (Normalising with the previous step's densities instead would make the
+// density blind to compression: particles squeezed together would raise numerator and denominator alike.)
+// On a uniform lattice both forms give m sum_j W_ij, so `mass` is the summation mass (Simulation2D: rho0
+// over the kernel sum of the initial lattice), with which that is exactly rho0.
 // Boundary particles contribute their mass to the fluid's sum in every wall model (they fill the kernel
 // support below a wall); with `boundaries_too` (the dummy model) they get a density of their own as well.
 #include <cstdint>
