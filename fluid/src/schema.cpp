@@ -396,7 +396,7 @@ TableSchema build() {
 
     TableSchema& surface = s.table("free_surface", "free-surface detection and wind stress");
     surface.number("threshold", "a particle is on the free surface when the divergence of position (2 inside the "
-                                "fluid, in 2D) is below this (a 3D build scales it by 3/2)")
+                                "fluid, in 2D) is below this (the participant is 2D; the core scales the threshold by Dim/2 for a 3D one)")
         .greater_than(0).less_than(2).fallback(1.5);
     surface.vector("wind_shear", 2, "shear stress applied to the free surface (wind): each free-surface particle "
                                     "carries it on its share of the surface (dp on the initial lattice; measured "

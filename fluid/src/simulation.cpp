@@ -84,6 +84,9 @@ Simulation2D::Simulation2D(const FluidSettings& settings, Scene2D scene, double 
         return sum;
     });
 
+    correction_min_divergence_ = static_cast<float>(full_support_divergence<Dim>(
+        with_kernels<Dim>(s_.kernel, h_, [&](const auto&, const auto& kg) { return lattice_divergence<Dim>(kg, s_.dp); })));
+
     const double eta2 = 0.01 * h_ * h_;
     rates_.mass = mass_;
     rates_.visc = ViscosityParams{s_.viscosity, s_.alpha, c0_, s_.nu, h_, eta2, 0.001 * h_ * h_};

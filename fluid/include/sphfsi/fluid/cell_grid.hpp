@@ -5,10 +5,14 @@
 // contiguous index range: a particle's candidates are 3^(Dim-1) ranges, not 3^Dim cells. Periodic axes
 // wrap; a range reached across the wrap carries the shift to add to the neighbour's position.
 //
-// Exactness: a pair closer than the radius always lies in adjacent cells because the cell size is a
-// hair larger than the radius and the binning floor((x - lo) / size), clamped to the grid, is monotone
-// and never moves two points further apart than they are. Clamping also keeps stray particles (outside
-// the domain given to build) in the border cells: slower, never wrong.
+// Exactness: a pair closer than the radius lies in adjacent cells because the cell size is a hair (1e-12)
+// larger than the radius and the binning floor((x - lo) / size), clamped to the grid, is monotone. Up to
+// rounding: with more than about 1e4 cells along an axis, the binning's rounding can exceed that hair, and a
+// pair within rounding of the radius may land two cells apart and be missed. At r = R every kernel but the
+// truncated Gaussian has W = W' = 0, and the Gaussian's gradient there is about e^-9 of its scale, so no
+// result moves (a review, 2026-11-28, which compared with brute force, 2D and 3D, and found no difference).
+// Clamping keeps stray particles (outside the domain given to build) in the border cells: slower, never
+// wrong.
 #include <algorithm>
 #include <array>
 #include <cmath>

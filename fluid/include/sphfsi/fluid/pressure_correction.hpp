@@ -21,15 +21,21 @@
 // here it made the particles unstable (docs/validation.md, the Tried table).
 //
 // Where. Only where a particle's support is full: L = I for boundary particles and for fluid particles whose
-// divergence of position (last evaluation) is below 0.9 Dim or whose det M is below 1/4. Near a free surface
+// divergence of position (last evaluation) is below 0.9 Dim, or below 0.95 of a full support's on the
+// initial lattice where that is lower, or whose det M is below 1/4. (The lattice's own divergence is 1.93 -
+// 2.03 in 2D for most kernel and h choices, which 0.9 Dim = 1.8 leaves room below, but 1.773 for the spiky
+// gradients at h = dp: with "mueller" or "spiky" at h <= 1.1 dp nothing was corrected (a review,
+// 2026-11-28). The lattice's bound applies only there, so every other choice corrects as before.) Near a free surface
 // the truncated support makes M singular, and there the symmetric form's truncation is what imposes p = 0 at
 // the surface (Colagrossi et al. 2009), which a correction would undo.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <vector>
 
 #include "sphfsi/fluid/cell_grid.hpp"
+#include "sphfsi/fluid/lattice.hpp"
 #include "sphfsi/fluid/particles.hpp"
 
 namespace sphfsi::fluid {
@@ -69,16 +75,26 @@ inline Vec<Dim> pair_corrected(const Mat<Dim>& Li, const Mat<Dim>& Lj, const Vec
     return out;
 }
 
-// The smallest divergence of position of a full support, and the smallest det M corrected.
-template <int Dim>
-constexpr float full_support_divergence = 0.9f * Dim;
+// The smallest det M corrected, and the smallest divergence of position corrected: 0.9 Dim, or 0.95 of a full
+// support's on the initial lattice (lattice_divergence) where that is lower.
 inline constexpr double min_moment_determinant = 0.25;
+template <int Dim>
+double full_support_divergence(double lattice) { return std::min(0.9 * Dim, 0.95 * lattice); }
+
+// The divergence of position of a particle with a full support on the lattice of spacing dp at the
+// reference density: -dp^Dim sum_j F(r_j) r_j^2, as the rate pass computes it (Dim in the continuum).
+template <int Dim, class KernelG>
+double lattice_divergence(const KernelG& kg, double dp) {
+    double sum = 0.0;
+    for_each_lattice_neighbour<Dim>(dp, kg.support(), [&](const Vec<Dim>&, double r) { sum -= kg.grad_factor(r) * r * r; });
+    return sum * std::pow(dp, Dim);
+}
 
 // L_i for every particle (identity where uncorrected), from the positions and densities now in P and the
-// divergence of position of the last evaluation (P.div_r).
+// divergence of position of the last evaluation (P.div_r), corrected where it is at least `min_divergence`.
 template <int Dim, class KernelG>
 void correction_matrices(const ParticleStore<Dim>& P, const CellGrid<Dim>& grid, const KernelG& kg, double mass,
-                         std::vector<Mat<Dim>>& L) {
+                         float min_divergence, std::vector<Mat<Dim>>& L) {
     using V = Vec<Dim>;
     const double R2 = grid.radius2();
     L.assign(P.size(), identity_matrix<Dim>());
@@ -86,7 +102,7 @@ void correction_matrices(const ParticleStore<Dim>& P, const CellGrid<Dim>& grid,
         typename CellGrid<Dim>::Range ranges[CellGrid<Dim>::max_ranges];
         int nr = -1;
         for (std::uint32_t i = begin; i < end; ++i) {
-            if (P.kind[i] != Kind::Fluid || P.div_r[i] < full_support_divergence<Dim>) continue;
+            if (P.kind[i] != Kind::Fluid || P.div_r[i] < min_divergence) continue;
             if (nr < 0) nr = grid.ranges(cell, ranges);
             Mat<Dim> M{};
             for (int r = 0; r < nr; ++r)

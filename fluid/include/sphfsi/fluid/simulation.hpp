@@ -72,8 +72,9 @@ public:
     std::uint64_t escaped_count() const { return st_.escaped; }
     std::size_t free_surface_count() const;
     // The divergence of position below which a fluid particle is on the free surface. The scene states it in
-    // 2D terms (2 in the bulk, 2.0 - 2.83 in the top layers of a 3D lattice against 3): scaled by Dim / 2, so a
-    // 3D build does not silently flag nothing at the scene's 1.5 (a review).
+    // 2D terms (2 in the bulk, 2.0 - 2.83 in the top layers of a 3D lattice against 3): scaled by Dim / 2, so
+    // that a 3D participant built on this core would not silently flag nothing at the scene's 1.5 (a review).
+    // Today's participant is 2D (Dim = 2), and the factor is 1.
     float surface_threshold() const { return static_cast<float>(s_.surface_threshold * Dim / 2.0); }
     // Kinetic and gravitational potential energy of the fluid particles in the tank [J/m in 2D], the
     // potential measured from y = 0 (the tank floor) along gravity.
@@ -132,7 +133,7 @@ private:
     template <class KernelG>
     void update_correction(const KernelG& kg) {
         if (!s_.kernel_correction) return;
-        correction_matrices(st_.P, grid_, kg, mass_, correction_);
+        correction_matrices(st_.P, grid_, kg, mass_, correction_min_divergence_, correction_);
         rates_.correction = correction_.data();
     }
     double boundary_density(double p) const;
@@ -203,6 +204,7 @@ private:
     // The mass in kernel sums of density: rho0 over the kernel sum of a full neighbourhood on the initial
     // lattice, so that sum m_sum W_ij is exactly rho0 there (the constructor says why).
     double summation_mass_ = 0.0;
+    float correction_min_divergence_ = 0.0f;  // pressure.kernel_correction: where a support counts as full
     TaitEos tait_;
     StandardEos standard_;
     RateParams<Dim> rates_;
