@@ -182,6 +182,37 @@ TEST_SUITE("hydrostatic") {
         CHECK(change[1] < 0.05 * change[0]);
     }
 
+    // Solenthaler & Pajarola's (2009) loop corrects at least min_iterations times (3, the minimum) and
+    // stops at the first correction after that whose largest predicted density error is under eta. Water at
+    // rest on its lattice without gravity has nothing to correct (its summed densities are rho0 exactly), so
+    // every step takes exactly min_iterations corrections (dt_max makes a window more than one step); with an
+    // eta no prediction can meet, a step makes max_iterations and is halved and retried, and the run stops at
+    // dt_min naming it. (No test pinned the loop's count before: a review, 2026-11-28.)
+    TEST_CASE("PCISPH corrects min_iterations times where nothing needs it, and not fewer") {
+        const double dp = 0.0025;
+        for (const int min_iterations : {3, 5}) {
+            CAPTURE(min_iterations);
+            auto solver = start(with(pcisph(water_tank(dp, 0.1, 0.12, 0.1, 0.05)),
+                                     {{"gravity", vec2(0.0, 0.0)}, {"pressure.min_iterations", min_iterations},
+                                      {"pressure.c0", 10.0}, {"time.dt_max", 1e-3}}));
+            std::uint64_t steps = 0, iterations = 0;
+            run(*solver, 0.02, 0.01, [&](const sphfsi::protocol::AdvanceReply& r) {
+                steps += r.substeps;
+                iterations += r.solver_iterations;
+            });
+            MESSAGE(steps << " steps, " << iterations << " corrections");
+            CHECK(steps > 0);
+            CHECK(iterations == steps * static_cast<std::uint64_t>(min_iterations));
+        }
+        // Under gravity with eta = 1e-12 no correction can stop the loop: the step halves to dt_min and the
+        // run stops, saying so. (max_iterations 3 and a dt_min of 1e-5 s keep the halvings few: this is about
+        // the stop, not about how long it takes.)
+        auto strict = start(with(pcisph(water_tank(dp, 0.1, 0.12, 0.1, 0.05)),
+                                 {{"pressure.eta", 1e-12}, {"pressure.max_iterations", 3}, {"time.dt_min", 1e-5}}));
+        CHECK_THROWS_WITH_AS(run(*strict, 0.01, 0.01), doctest::Contains("PCISPH did not converge"),
+                             sphfsi::protocol::SolverError);
+    }
+
     TEST_CASE("PCISPH: the recorded pressure of a tank at rest") {
         const double H = 0.1, dp = H / 40, g = 9.81, rho0 = 1000.0;
         auto solver = start(pcisph(water_tank(dp, 0.1, 0.12, 0.1, H)));
