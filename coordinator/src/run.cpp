@@ -100,6 +100,10 @@ private:
     };
     Stop next_stop() const;
     double structure_alone_step() const;
+    // Shorter than this, two times are one to the coordinator (a window landing within it of a stop lands on
+    // the stop): 1e-12 s, or 1e-12 of end_time where that is longer.
+    double time_resolution() const { return 1e-12 * std::max(1.0, end_); }
+    double step_wanted(const std::string& role, double dt_wanted, const char* message) const;
     // A resume's copies replace record.h5 and watchpoints.csv, each once the run has reached the time that file
     // ends at: until then it holds more than its copy, and a resume that stops must leave it.
     // Each is tried even when the other fails (the first failure is rethrown): a record that could not be
@@ -385,8 +389,7 @@ void Runner::initialise(std::optional<Checkpoint>& resume) {
         if (resume) req.state = resume->states.at(role);
         Message m = hub_->request(role, MessageType::Init, req);
         const auto& ready = m.as<InitReply>();
-        if (!(ready.dt_wanted > 0) || !std::isfinite(ready.dt_wanted))  // the first window is sized by it
-            throw ParticipantFailure(role, "garbage", "READY wants a step of " + seconds(ready.dt_wanted));
+        const double dt_wanted = step_wanted(role, ready.dt_wanted, "READY");  // the first window is sized by it
         if (role == "structure") {
             // A structure alone may have no wetted surface; coupled, the fluid needs one to push on.
             if (!ready.interface && coupled_)
@@ -401,9 +404,9 @@ void Runner::initialise(std::optional<Checkpoint>& resume) {
                 // Where the fluid will be told the interface is (INIT below), and no motion before t0 to extrapolate.
                 iface_.previous_displacement = iface_.fluid_displacement = iface_.displacement;
             }
-            structure_dt_ = ready.dt_wanted;
+            structure_dt_ = dt_wanted;
         } else {
-            fluid_dt_ = ready.dt_wanted;
+            fluid_dt_ = dt_wanted;
         }
         try {
             recorder_->set_participant(role, hub_->peers().at(role).software, ready.info);
@@ -500,6 +503,21 @@ double Runner::structure_alone_step() const {
     return structure_dt_;
 }
 
+// A participant's step sizes the windows (coupled, or a structure alone under a load that changes in time),
+// so one shorter than the coordinator's time resolution would never reach the end: a structure alone that
+// wanted 1e-19 s took 1e-19 s windows at 7000 a second, for ever (a review, 2026-11-28). A real solver's
+// step collapses like that only when it diverged; it stops the run, naming the participant.
+double Runner::step_wanted(const std::string& role, double dt_wanted, const char* message) const {
+    if (!(dt_wanted > 0) || !std::isfinite(dt_wanted))
+        throw ParticipantFailure(role, "garbage", std::string(message) + " wants a step of " + seconds(dt_wanted));
+    if (dt_wanted < time_resolution())
+        throw ParticipantFailure(role, "diverged", std::string(message) + " wants a step of " + seconds(dt_wanted) +
+                                                       ", below the coordinator's time resolution of " +
+                                                       seconds(time_resolution()) +
+                                                       " (1e-12 s, or 1e-12 of run.end_time): its step has collapsed");
+    return dt_wanted;
+}
+
 // Windows land exactly on frame times (frame k at k * output_interval; frame 0 is the initial state), on
 // checkpoint times (checkpoint k at k * checkpoint_interval) and on the end, never past it. Two of these closer
 // than a sliver are taken as one, or the gap between them would be a window of its own, down to 1e-11 s
@@ -545,7 +563,7 @@ WindowOutcome Runner::advance_alone(const WindowPlan& p) {
 void Runner::loop() {
     loop_start_ = Clock::now();
     loop_cpu_start_ = cpu_seconds();
-    const double eps = 1e-12 * std::max(1.0, end_);
+    const double eps = time_resolution();
     while (t_ < end_ - eps) {
         const Stop stop = next_stop();
         const double t_stop = stop.t;
@@ -555,8 +573,8 @@ void Runner::loop() {
         WindowOutcome o = coupled_ ? scheme_->run(plan, iface_) : advance_alone(plan);
         double wall = std::chrono::duration<double>(Clock::now() - start).count();
         t_ = (plan.t + plan.dt >= t_stop - eps) ? t_stop : plan.t + plan.dt;
-        if (fluid_) fluid_dt_ = o.fluid.reply.dt_wanted;
-        if (structure_) structure_dt_ = o.structure.reply.dt_wanted;
+        if (fluid_) fluid_dt_ = step_wanted("fluid", o.fluid.reply.dt_wanted, "ADVANCED");
+        if (structure_) structure_dt_ = step_wanted("structure", o.structure.reply.dt_wanted, "ADVANCED");
         ++windows_;
         steps_ += fluid_ ? o.fluid.reply.substeps : o.structure.reply.substeps;
         InterfaceWork work;

@@ -192,6 +192,14 @@ def test_frames_that_cannot_be_recorded_are_named():
     run_fault("ready_dt_zero", "error: structure READY wants a step of 0", 5)
 
 
+def test_a_step_that_collapsed_stops_the_run():
+    """A structure alone under a sine load steps once per window at the step it wants; one that wanted 1e-19 s
+    was given 1e-19 s windows, 7000 a second, for ever (a review, 2026-11-28)."""
+    run_fault("tiny_step", "error: structure ADVANCED wants a step of 9.9999999999999998e-20 s, below the "
+                           "coordinator's time resolution of 1e-10 s", 5,
+              extra=("--set", 'load.profile="sine"', "--set", "load.force=[1.0, 0.0]"))
+
+
 def test_a_stat_that_appears_late_is_named_not_recorded():
     # The window columns are fixed by the first window (one dataset per name, a row per window): a stats
     # name first sent later cannot be recorded, and the log says so once instead of dropping it silently.

@@ -40,6 +40,8 @@ section picks the fault:
   mode = "stall"          never answers the first ADVANCE while its heartbeats go on, progress standing still
   mode = "overflow"       as a structure, moves vertex 0 by +1e308 m in x at iteration 0 and -1e308 m at later ones:
                           finite answers whose implicit iterate overflows
+  mode = "tiny_step"      wants a step of 1e-19 s in every ADVANCED (a step that collapsed: windows that short
+                          would never reach the end)
 Otherwise it answers like a structure that does not move. Started with --name fluid it is a fluid instead (it
 says so at HELLO and answers with a zero force), so that a coupled scene can run two of it; it acknowledges
 SAVE and RESTORE, which implicit coupling asks for.
@@ -167,7 +169,7 @@ def main():
                 outputs = ({"force": zero} if kind_said == "fluid" and mode not in ("wrong_kind", "fluid_v1")
                            else {"displacement": f8(4, moved), "velocity": zero})
                 send("ADVANCED", seq + 7 if mode == "wrong_seq" else seq,
-                     {"t": now + 1.0 if mode == "wrong_time" else now, "dt_wanted": 0.01,
+                     {"t": now + 1.0 if mode == "wrong_time" else now, "dt_wanted": 1e-19 if mode == "tiny_step" else 0.01,
                       "outputs": outputs,
                       "substeps": body.get("substeps") or 1, "solver_iterations": 0, "compute_s": 0.0,
                       "stats": {"x": "text"} if mode == "stats_text" else {"a/b": 1.0} if mode == "stats_bad_name"
