@@ -275,6 +275,17 @@ double Simulation2D::take_step(double dt, double t_after, bool adaptive, WindowS
     return dt;
 }
 
+// Far from t = 0 a double's spacing outgrows the step (0.125 s at t = 1e15 s, against about 1e-4 s): t + dt
+// is t, and the adaptive loop stepped for ever at one time (a review, 2026-11-28).
+void Simulation2D::require_clock_moves(double dt) const {
+    if (!(st_.t + dt > st_.t))
+        throw protocol::SolverError("bad_state", "step " + std::to_string(st_.step) + " at t = " + fmt(st_.t) +
+                                                     " s: a step of " + fmt(dt) +
+                                                     " s does not move the clock (a double's spacing there is " +
+                                                     fmt(std::nextafter(st_.t, INFINITY) - st_.t) +
+                                                     " s); start the run nearer t = 0");
+}
+
 WindowStats Simulation2D::advance(double t_end, std::uint32_t substeps, const std::function<void()>& on_step) {
     WindowStats ws;
     ws.dt_min = std::numeric_limits<double>::infinity();
@@ -294,6 +305,7 @@ WindowStats Simulation2D::advance(double t_end, std::uint32_t substeps, const st
     if (substeps > 0) {
         const double dt = (t_end - t_start) / substeps;
         for (std::uint32_t k = 0; k < substeps; ++k) {
+            require_clock_moves(dt);
             if (!st_.rates_fresh) evaluate();
             const double taken = take_step(dt, k + 1 == substeps ? t_end : st_.t + dt, false, ws);  // no drift from summing dt
             record(taken);
@@ -310,6 +322,7 @@ WindowStats Simulation2D::advance(double t_end, std::uint32_t substeps, const st
             const double steps_left = std::max(1.0, std::ceil(remaining / stable_dt() * (1.0 - 1e-12)));
             const bool last = steps_left == 1.0;
             const double dt = remaining / steps_left;  // exactly `remaining` when last
+            require_clock_moves(dt);
             const double taken = take_step(dt, last ? t_end : st_.t + dt, true, ws);
             record(taken);
         }

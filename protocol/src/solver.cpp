@@ -34,6 +34,12 @@ void check_window(const AdvanceRequest& request, double now, const std::string& 
     if (!(request.dt > 0.0) || !std::isfinite(request.dt))
         throw SolverError("bad_message", who + ": ADVANCE dt = " + seconds(request.dt) +
                                              " is not a finite window length > 0");
+    // Far from t = 0 a double's spacing outgrows a short window (0.125 s at t = 1e15 s): such a window would
+    // end where it starts, and no step could be taken in it.
+    if (!(request.t + request.dt > request.t))
+        throw SolverError("bad_message", who + ": ADVANCE dt = " + seconds(request.dt) + " at t = " + seconds(request.t) +
+                                             " does not move the clock (a double's spacing there is " +
+                                             seconds(std::nextafter(request.t, INFINITY) - request.t) + ")");
     if (!same_instant(request.t, now, request.dt))
         throw SolverError("bad_state", who + ": ADVANCE starts at t = " + seconds(request.t) + " but the " + who +
                                            " is at t = " + seconds(now));

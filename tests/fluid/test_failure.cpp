@@ -133,6 +133,23 @@ TEST_SUITE("failure") {
         CHECK(checkpoint_refused.find("below the floor") != std::string::npos);
     }
 
+    TEST_CASE("a clock whose steps no longer move it stops the run instead of stepping in place") {
+        // At t0 = 1e15 s a double's spacing is 0.125 s and the stable step about 1e-4 s: t + dt was t, and
+        // the adaptive loop stepped for ever at the same time (a review, 2026-11-28). The window itself (1 s)
+        // is one the clock can hold.
+        for (const std::uint32_t substeps : {0u, 100u}) {
+            CAPTURE(substeps);
+            auto s = start(water_tank(0.005, 0.1, 0.12, 0.1, 0.05), 1e15);
+            sphfsi::protocol::Progress progress;
+            sphfsi::protocol::AdvanceRequest req;
+            req.t = 1e15;
+            req.dt = 1.0;
+            req.substeps = substeps;
+            CHECK_THROWS_WITH_AS(s->advance(req, progress), doctest::Contains("does not move the clock"),
+                                 sphfsi::protocol::SolverError);
+        }
+    }
+
     TEST_CASE("a density bound is enforced") {
         // Standard SPH with a very soft equation of state compresses far beyond 1 %.
         const std::string msg = diverge(with(wcsph(dam_break(0.1 / 16)), {{"pressure.model", "standard"},

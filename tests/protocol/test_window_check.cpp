@@ -59,6 +59,15 @@ TEST_CASE("check_window refuses a start that is not finite, or a length that is 
     CHECK(verdict(inf, 1e-3, 0.0) == "bad_message");
 }
 
+TEST_CASE("check_window refuses a window too short to move the clock at its start, as bad_message") {
+    // At t = 1e15 s a double's spacing is 0.125 s: t + 1 ms is t, and the fluid answered such a window with
+    // no step at all (substeps 0; a review, 2026-11-28).
+    CHECK(verdict(1e15, 1e-3, 1e15) == "bad_message");
+    CHECK(verdict(1.0, 1e-17, 1.0) == "bad_message");
+    CHECK(verdict(1e15, 0.25, 1e15) == "");
+    CHECK(verdict(0.0, 1e-300, 0.0) == "");
+}
+
 TEST_CASE("a solver whose clock is not finite accepts no window, and no time is the same instant as infinity") {
     // |t - inf| <= 1e-9 x inf held for every finite t: a structure resumed from a state at t = inf accepted
     // every ADVANCE and its run completed (a review, 2026-11-27).

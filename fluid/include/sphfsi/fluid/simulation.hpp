@@ -154,6 +154,7 @@ private:
     // must end the window where the next one starts them: refresh_solid_rates). Returns the step taken
     // (PCISPH may halve it).
     double take_step(double dt, double t_after, bool adaptive, WindowStats& ws);
+    void require_clock_moves(double dt) const;
     void step_symplectic(double dt, double t_after);
     // Positions by dt, and integrated densities by density_dt with the rates of the positions now held.
     void drift(double dt, double density_dt);
