@@ -47,22 +47,30 @@ double distance_to_quad(const std::array<Vec2, 4>& q, const Vec2& p) {
 // A periodic axis has no walls, and the mesh must lie within its period: solid particles go where the
 // structure puts them, never wrapped, so one across the seam would sit a period away from the water it meets
 // there in every rate that wraps positions (a review, 2026-11-27).
-void check_inside_tank(const protocol::InterfaceMesh& mesh, const FluidSettings& s, const char* where = "") {
+// `position(v)` is vertex v's position; `code` and `why` say whose fault it is.
+template <class Position>
+void check_inside_tank(std::uint64_t vertices, Position position, const FluidSettings& s, const char* where,
+                       const char* code, const char* why) {
     const double wall = s.wall_layers * s.dp;
     const double x_wall = s.periodic[0] ? 0.0 : wall, y_wall = s.periodic[1] ? 0.0 : wall;
     const double x_lo = -x_wall, x_hi = s.tank_width + x_wall, y_lo = -y_wall, y_hi = s.tank_height + y_wall;
-    for (std::uint64_t v = 0; v < mesh.vertices.rows(); ++v) {
-        const double x = mesh.vertices(v, 0), y = mesh.vertices(v, 1);
-        if (x < x_lo || x > x_hi || y < y_lo || y > y_hi) {
-            char buf[400];
+    for (std::uint64_t v = 0; v < vertices; ++v) {
+        const auto [x, y] = position(v);
+        if (!(x >= x_lo && x <= x_hi && y >= y_lo && y <= y_hi)) {
+            char buf[480];
             std::snprintf(buf, sizeof buf,
                           "the structure's interface mesh has vertex %llu at (%.6g, %.6g) m%s, outside the tank and its walls "
-                          "(x in [%.6g, %.6g], y in [%.6g, %.6g] m%s): fluid.tank and the structure's geometry disagree",
+                          "(x in [%.6g, %.6g], y in [%.6g, %.6g] m%s): %s",
                           static_cast<unsigned long long>(v), x, y, where, x_lo, x_hi, y_lo, y_hi,
-                          s.periodic[0] || s.periodic[1] ? ", a periodic axis's period alone" : "");
-            throw SolverError("bad_config", buf);
+                          s.periodic[0] || s.periodic[1] ? ", a periodic axis's period alone" : "", why);
+            throw SolverError(code, buf);
         }
     }
+}
+
+void check_inside_tank(const protocol::InterfaceMesh& mesh, const FluidSettings& s, const char* where = "") {
+    check_inside_tank(mesh.vertices.rows(), [&](std::uint64_t v) { return std::pair{mesh.vertices(v, 0), mesh.vertices(v, 1)}; },
+                      s, where, "bad_config", "fluid.tank and the structure's geometry disagree");
 }
 
 const F64Array* find_f64(const protocol::Fields& fields, const char* name) {
@@ -196,7 +204,7 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
         coupling->end_window();
         // Where the structure starts, too: a deflected start (INIT's interface_state) 5 m above a 0.4 m tank was
         // accepted (a review, 2026-11-27).
-        // A fresh start only: a resume's interface_state is where the run had got to, which no window checks.
+        // A fresh start only: a resume's interface_state is where the run had got to, whose windows were checked (advance).
         if (u0 && request.state.empty() && u0->values.size() == 2 * request.interface->vertices.rows()) {
             protocol::InterfaceMesh started = *request.interface;
             for (std::size_t i = 0; i < started.vertices.values.size(); ++i) started.vertices.values[i] += u0->values[i];
@@ -315,9 +323,22 @@ protocol::AdvanceReply SphSolver::advance(const protocol::AdvanceRequest& reques
     protocol::check_window(request, t, "fluid");
     if (step_floor_failure_) throw *step_floor_failure_;
     if (coupling_) {
+        // Where the window ends must be in the tank too, checked before the window's state takes anything in
+        // (a refused window changes nothing): a structure moved 1e6 m away was taken, its solid particles then
+        // outside every wall (a review, 2026-11-28). The path within the window is an interpolation between
+        // two checked ends; it is not checked again.
+        const F64Array* displacement = find_f64(request.inputs, "displacement");
+        const auto& reference = coupling_->vertex_reference();
+        if (displacement && displacement->rows() == reference.size() && displacement->cols() == 2)
+            check_inside_tank(
+                reference.size(),
+                [&](std::uint64_t v) {
+                    return std::pair{reference[v][0] + (*displacement)(v, 0), reference[v][1] + (*displacement)(v, 1)};
+                },
+                settings_, " at the window's end (reference plus ADVANCE displacement)", "bad_message",
+                "the structure answered a position the fluid cannot hold");
         try {
-            coupling_->begin_window(t, request.dt, find_f64(request.inputs, "displacement"),
-                                    find_f64(request.inputs, "velocity"));
+            coupling_->begin_window(t, request.dt, displacement, find_f64(request.inputs, "velocity"));
         } catch (const std::invalid_argument& e) {  // an input of the wrong shape: a bad array size
             throw SolverError("bad_message", e.what());
         }

@@ -532,6 +532,11 @@ TEST_SUITE("adapter") {
             F64Array moved = F64Array::zeros(nv, 2);
             moved(0, 0) = 1e-4;
             CHECK(code_with(moved, F64Array::zeros(nv + 1, 2)) == "bad_message");
+            // A structure moved out of the tank at the window's end: its solid particles would be outside every
+            // wall and the neighbour grid would span the distance (accepted before; a review, 2026-11-28).
+            F64Array far = F64Array::zeros(nv, 2);
+            for (std::size_t v = 0; v < nv; ++v) far(v, 0) = 1e6;
+            CHECK(code_of(far) == "bad_message");
             CHECK(s.checkpoint() == before);
         }
         // At rest, after the fluid has settled around it: Archimedes, rho0 g A = 1000 * 9.81 * 0.1 * 0.02 N/m up.
