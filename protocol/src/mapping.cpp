@@ -37,6 +37,9 @@ std::array<double, 4> bilinear_weights(const std::array<std::array<double, 2>, 4
         eta -= deta;
         if (std::abs(dxi) + std::abs(deta) < 1e-14) break;
     }
+    // Far from the origin (a cell at 1e300 m) the iteration overflows to NaN, which clamp passes through: the
+    // cell's centre stands in, so the weights stay weights and the distance is still from the cell.
+    if (!std::isfinite(xi) || !std::isfinite(eta)) xi = eta = 0.0;
     double cxi = std::clamp(xi, -1.0, 1.0), ceta = std::clamp(eta, -1.0, 1.0);
     auto n = shape(cxi, ceta);
     if (outside_distance) {
@@ -45,7 +48,8 @@ std::array<double, 4> bilinear_weights(const std::array<std::array<double, 2>, 4
             px += n[i] * q[i][0];
             py += n[i] * q[i][1];
         }
-        *outside_distance = std::hypot(px - x, py - y);
+        const double d = std::hypot(px - x, py - y);
+        *outside_distance = std::isnan(d) ? std::numeric_limits<double>::infinity() : d;  // never nearer than it is
     }
     return n;
 }
@@ -62,7 +66,7 @@ MappedPoint locate(const InterfaceMesh& mesh, double x, double y) {
         }
         double d = 0;
         auto w = bilinear_weights(q, x, y, &d);
-        if (d < best.distance) {
+        if (best.cell < 0 || d < best.distance) {  // the first cell even at an infinite distance
             best = MappedPoint{static_cast<std::int32_t>(c), idx, w, d};
             if (d < 1e-12) break;
         }

@@ -43,6 +43,21 @@ TEST_CASE("points are located in their cell with weights that reproduce their po
     }
 }
 
+TEST_CASE("a point far from a cell far away is located in it, at a distance that says how far") {
+    // A structure whose cell sits at 1e300 m: Newton's inverse map overflowed to NaN, no distance compared
+    // below infinity, and a watchpoint was told "the structure publishes no interface cells" (a review,
+    // 2026-11-28). The nearest cell is found; the distance is at least the real one (or infinite).
+    for (const double far : {1e300, 1.7e308}) {
+        CAPTURE(far);
+        InterfaceMesh m{F64Array({4, 2}, {far, far, far + far * 1e-3, far, far + far * 1e-3, far + far * 1e-3, far, far + far * 1e-3}),
+                        I32Array({1, 4}, {0, 1, 2, 3})};
+        const MappedPoint p = locate(m, 0.0, 0.0);
+        CHECK(p.cell == 0);
+        CHECK(p.distance >= far);
+        CHECK_FALSE(std::isnan(p.distance));
+    }
+}
+
 TEST_CASE("spreading point forces preserves total force and moment in the deformed configuration") {
     InterfaceMesh m = strip();
     std::mt19937 rng(11);
