@@ -69,10 +69,25 @@ public:
         socket_.set(zmq::sockopt::maxmsgsize, static_cast<int64_t>(DecodeLimits{}.max_bytes));
         socket_.connect(endpoint);
     }
-    void send(const Message& m) {
+    // Waits for room in ZeroMQ's queue in polls of 10 ms, the mutex released between them, and returns false,
+    // unsent, once `give_up()` says so. A send that blocked held the mutex for as long as the queue was full:
+    // with the coordinator gone and the queue filled by HEARTBEATs, for ever, and the heartbeat thread, which
+    // ends a participant whose coordinator fell silent, waited on the mutex (a review, 2026-11-28).
+    template <class GiveUp>
+    bool send(const Message& m, GiveUp give_up) {
         std::string bytes = encode(m);
-        std::lock_guard lock(mutex_);
-        socket_.send(zmq::buffer(bytes), zmq::send_flags::none);
+        while (true) {
+            try {
+                std::lock_guard lock(mutex_);
+                zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLOUT, 0};
+                if (zmq::poll(&item, 1, std::chrono::milliseconds(10)) > 0 &&
+                    socket_.send(zmq::buffer(bytes), zmq::send_flags::dontwait))
+                    return true;
+            } catch (const zmq::error_t& e) {
+                if (e.num() != EINTR) throw;  // a signal: give_up decides
+            }
+            if (give_up()) return false;
+        }
     }
     // Without blocking: when ZeroMQ's queue is full the coordinator is not reading anyway, and a heartbeat
     // thread blocked in send, holding the mutex, could no longer notice a signal or a silent coordinator.
@@ -176,6 +191,12 @@ public:
         int code = 0;
         try {
             code = serve();
+        } catch (const Unsent&) {
+            // The statuses the main loop returns for the same reasons (docs/protocol.md, BYE).
+            code = g_stop ? 130 : 4;
+            log(g_stop ? std::string("stopped by signal with a reply waiting to go out")
+                       : "the coordinator has been silent for " + std::to_string(link_->silent_s()) +
+                             " s with a reply waiting to go out; exiting");
         } catch (...) {
             stop_beat();  // a joinable std::thread must not be destroyed
             throw;
@@ -187,10 +208,12 @@ public:
 private:
     void log(const std::string& what) const { std::cerr << "[" << opt_.name << "] " << what << std::endl; }
 
+    // Thrown when a reply cannot leave and the coordinator is silent past timeout_s, or a signal came.
+    struct Unsent {};
     void reply(std::uint64_t seq, MessageType type, Body body = Empty{}) {
         Message m = make_message(type, seq, opt_.token, std::move(body));
         m.version = version_;
-        link_->send(m);
+        if (!link_->send(m, [this] { return g_stop || link_->silent_s() > timeout_s_; })) throw Unsent{};
     }
     void reply_error(std::uint64_t seq, const std::string& code, const std::string& message) {
         reply(seq, MessageType::Error, ErrorReply{code, message, seq});
@@ -201,8 +224,11 @@ private:
                 "sphfsi-" + solver_->kind() + " " + SPHFSI_VERSION, ::getpid()};  // the log adds the protocol version
         Message hello = make_message(MessageType::Hello, 1, opt_.token, h);
         hello.version = kProtocolVersion;
-        link_->send(hello);
         auto deadline = Clock::now() + std::chrono::duration<double>(opt_.startup_timeout_s);
+        if (!link_->send(hello, [&] { return g_stop || Clock::now() >= deadline; })) {
+            log("HELLO could not be sent to " + opt_.endpoint + " within " + std::to_string(opt_.startup_timeout_s) + " s");
+            return false;
+        }
         zmq::message_t raw;
         while (Clock::now() < deadline && !g_stop) {
             if (!link_->receive(raw, 100)) continue;

@@ -452,6 +452,29 @@ def test_a_long_advance_outlives_timeout_while_the_coordinator_beats_and_keeps_m
             s.close()
 
 
+def test_a_reply_that_cannot_leave_does_not_outlive_a_vanished_coordinator():
+    """The coordinator vanishes in the middle of an ADVANCE of about 2 s while HEARTBEATs every 1 ms fill
+    ZeroMQ's queue of 1000 messages. The reply then blocked in send holding the socket's mutex, and the
+    heartbeat thread, which ends a participant whose coordinator fell silent, waited on that mutex: the
+    process stayed for ever (a review, 2026-11-28). It must end with status 4 within timeout_s (4 s)."""
+    p = programs()[0]  # sphfsi-structure: the runtime under test is ours (rigid_plate.py has its own)
+    s = Session(p.argv, heartbeat_s=0.001, timeout_s=4.0)
+    try:
+        n = vertices(s.init(p.config))
+        probe = 10_000
+        r = s.c.request("ADVANCE", 3, advance(0.0, 1e-3, n, substeps=probe), timeout_s=30)
+        assert r["type"] == "ADVANCED", r
+        per_step = max(r["body"]["compute_s"], 1e-6) / probe
+        s.c.send("ADVANCE", 4, advance(1e-3, 1e-3, n, substeps=max(probe, int(2.0 / per_step))))
+        s.c.close()
+        start = time.monotonic()
+        code = s.wait(4.0 + 6.0)
+        assert code == 4, (code, time.monotonic() - start, s.output())
+        assert "silent" in s.output(), s.output()
+    finally:
+        s.close()
+
+
 def cpu_seconds(pid):
     """User + system CPU time of a process (0 once it is gone)."""
     try:
