@@ -26,6 +26,13 @@ namespace {
 
 std::string quoted(const std::string& name) { return "'" + protocol::printable(name, 64) + "'"; }
 
+// The record's strings are HDF5 variable-length UTF-8, which end at a NUL: text that is not UTF-8 made every
+// attribute of its group unreadable to h5py (UnicodeDecodeError), and a NUL cut the rest of the text off
+// without a word (a review, 2026-11-28). A peer's text is refused rather than escaped: the record keeps what
+// was sent, or nothing.
+bool record_text(const std::string& s) { return protocol::is_utf8(s) && s.find('\0') == std::string::npos; }
+constexpr const char* kRecordTextRule = "which is not UTF-8 text without NUL bytes (the record's strings are UTF-8 and end at a NUL)";
+
 // Every entry of the (nested) table is recorded as one attribute named by its dotted path: a value the
 // record cannot hold, or two entries that would land on one name (`a.b` and `a = {b}`, or `software`, the
 // HELLO's), would lose one of them without a word. `names` collects the attribute names.
@@ -39,6 +46,9 @@ void check_info_keys(const std::string& prefix, const Value& v, std::set<std::st
         if (x.is_string() && x.as_string().size() > kMaxInfoString)
             throw RecordRefused("sent READY info " + quoted(prefix + k) + " of " + std::to_string(x.as_string().size()) +
                                 " bytes; at most " + std::to_string(kMaxInfoString));
+        if (x.is_string() && !record_text(x.as_string()))
+            throw RecordRefused("sent READY info " + quoted(prefix + k) + " = '" + protocol::printable(x.as_string(), 64) +
+                                "', " + kRecordTextRule);
         if (!(x.is_number() || x.is_string() || x.is_bool() || x.is_table()))
             throw RecordRefused("sent READY info " + quoted(prefix + k) + " as " + x.type_name() +
                                 "; allowed: a number, string, boolean or map");
@@ -247,6 +257,8 @@ h5::Series& Recorder::series(const std::string& path, const std::vector<hsize_t>
 
 void Recorder::set_participant(const std::string& role, const std::string& software, const Value& info) {
     std::set<std::string> names{"software"};
+    if (!record_text(software))
+        throw RecordRefused("says in HELLO that it is software '" + protocol::printable(software, 64) + "', " + kRecordTextRule);
     if (info.is_table()) check_info_keys("", info, names);
     std::string path = "/participants/" + role;
     h5::create_groups(h5_.get(), path);

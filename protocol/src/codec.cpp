@@ -35,12 +35,6 @@ std::size_t utf8_sequence(std::string_view s, std::size_t i) {
     return n;
 }
 
-bool is_utf8(std::string_view s) {
-    for (std::size_t i = 0, n; i < s.size(); i += n)
-        if ((n = utf8_sequence(s, i)) == 0) return false;
-    return true;
-}
-
 // `s` with each byte outside well-formed UTF-8 (and, if `controls`, each ASCII control character) as \xNN.
 std::string escaped(std::string_view s, bool controls, std::size_t max_bytes) {
     static const char hex[] = "0123456789abcdef";
@@ -527,6 +521,12 @@ bool body_matches(MessageType type, const Body& body) {
     }
 }
 }  // namespace
+
+bool is_utf8(std::string_view s) {
+    for (std::size_t i = 0, n; i < s.size(); i += n)
+        if ((n = utf8_sequence(s, i)) == 0) return false;
+    return true;
+}
 
 std::string printable(std::string_view received, std::size_t max_bytes) {
     return escaped(received, true, max_bytes);

@@ -182,6 +182,12 @@ def test_frames_that_cannot_be_recorded_are_named():
     run_fault("info_twice", "error: structure sent READY info 'a.b' twice", 5)
     run_fault("info_software", "error: structure sent READY info 'software' twice", 5)
     run_fault("info_array", "error: structure sent READY info 'arr' as an array; allowed: a number, string", 5)
+    # The record's strings are UTF-8 ending at a NUL: text that was not UTF-8 made the group's attributes
+    # unreadable to h5py, and a NUL cut the text short (a review, 2026-11-28).
+    run_fault("info_not_utf8", "error: structure sent READY info 's' = '\\xff\\xfe\\x1bX', which is not UTF-8 text without NUL bytes", 5)
+    run_fault("info_nul", "error: structure sent READY info 's' = 'a\\x00b', which is not UTF-8 text without NUL bytes", 5)
+    run_fault("software_nul", "error: structure says in HELLO that it is software 'mis\\x00behaving.py', which is not UTF-8", 5,
+              env={"MISBEHAVE": "software_nul"})
     run_fault("stats_text", "error: structure reports stats 'x' that is not a number", 5)
     run_fault("stats_bad_name", "error: structure reports stats 'a/b', which is not a plain name", 5)
     # Bounds: a participant cannot make the record hold unbounded attributes or columns (200,000 info keys

@@ -26,6 +26,9 @@ section picks the fault:
   mode = "info_twice"     sends READY info {"a.b": 1, "a": {"b": "x"}} (one attribute name twice)
   mode = "info_software"  sends READY info {"software": "forged"} (the HELLO's own attribute)
   mode = "info_array"     sends READY info {"arr": [1, 2, 3]}
+  mode = "info_not_utf8"  sends READY info {"s": <the 4 bytes ff fe 1b 58, not UTF-8>}
+  mode = "info_nul"       sends READY info {"s": "a\\0b"} (a NUL inside)
+  mode = "software_nul"   says HELLO software "mis\\0behaving" (from the env, like "version")
   mode = "ready_dt_zero"  sends READY with dt_wanted 0
   mode = "stats_text"     reports ADVANCED stats with a string value
   mode = "stats_bad_name" reports ADVANCED stats named "a/b" (it would become an HDF5 group)
@@ -66,9 +69,12 @@ def main():
     beating = threading.Event()
 
     def send(kind, seq, body, v=1, wrong_token=False):
+        packed = msgpack.packb({"v": v, "type": kind, "seq": seq, "token": "not-it" if wrong_token else token,
+                                "body": body}, use_bin_type=True)
+        # msgpack-python writes only valid UTF-8: the str "QQQQ" is turned into 4 bytes that are not.
+        packed = packed.replace(b"\xa4QQQQ", b"\xa4\xff\xfe\x1bX")
         with lock:
-            sock.send(msgpack.packb({"v": v, "type": kind, "seq": seq, "token": "not-it" if wrong_token else token,
-                                     "body": body}, use_bin_type=True))
+            sock.send(packed)
 
     def recv(timeout_s=10.0):
         end = time.time() + timeout_s
@@ -83,7 +89,8 @@ def main():
     version = 99 if mode == "version" else 1
     kind_said = "fluid" if mode in ("wrong_kind", "fluid_v1") or args.get("--name") == "fluid" else "structure"
     send("HELLO", 1, {"name": args.get("--name", "structure"), "kind": kind_said, "version_min": version,
-                      "version_max": version, "software": "misbehaving.py", "pid": os.getpid()}, v=version)
+                      "version_max": version, "software": "mis\0behaving.py" if mode == "software_nul" else "misbehaving.py",
+                      "pid": os.getpid()}, v=version)
     reply = recv()
     if reply["type"] != "WELCOME":
         print("misbehaving: refused:", reply["body"].get("message"), file=sys.stderr)
@@ -125,7 +132,7 @@ def main():
             fail_at = float(body["config"].get("fail_at", 0.0))
             info = {"info_bad_key": {"": 1}, "info_huge": {f"k{i}": i for i in range(200000)},
                     "info_twice": {"a.b": 1, "a": {"b": "x"}}, "info_software": {"software": "forged"},
-                    "info_array": {"arr": [1, 2, 3]}}.get(mode, {})
+                    "info_array": {"arr": [1, 2, 3]}, "info_not_utf8": {"s": "QQQQ"}, "info_nul": {"s": "a\0b"}}.get(mode, {})
             send("READY", seq, {"dt_wanted": 0.0 if mode == "ready_dt_zero" else 0.01, "interface": mesh, "info": info})
             if mode == "early":
                 zero = f8(4, [0.0] * 8)

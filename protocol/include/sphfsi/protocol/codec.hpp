@@ -29,4 +29,7 @@ void encode_value(std::string& out, const Value& v);
 // malformed. Use it wherever a received string (a type, key, dtype or field name) goes into a text.
 std::string printable(std::string_view received, std::size_t max_bytes = 80);
 
+// Whether `s` is well-formed UTF-8 (RFC 3629; what a strict decoder such as Python's accepts).
+bool is_utf8(std::string_view s);
+
 }  // namespace sphfsi::protocol
