@@ -414,9 +414,10 @@ Body read_body(MessageType type, std::uint32_t version, const msgpack::object& o
             x.version = need_u32(m.need("version"), w + ".version");
             x.heartbeat_s = need_double(m.need("heartbeat_s"), w + ".heartbeat_s");
             x.timeout_s = need_double(m.need("timeout_s"), w + ".timeout_s");
-            // A NaN timeout would never expire: the participant would outlive a silent coordinator.
+            // A NaN timeout would never expire: the participant would outlive a silent coordinator. Above 1e6 s
+            // (the scene allows 60 s and 3600 s) a period overflows a clock's integer nanoseconds.
             for (double s : {x.heartbeat_s, x.timeout_s})
-                if (!(s > 0.0) || !std::isfinite(s)) bad(w + ": heartbeat_s and timeout_s must be finite numbers > 0");
+                if (!(s > 0.0 && s <= 1e6)) bad(w + ": heartbeat_s and timeout_s must be numbers > 0 and at most 1e6 s");
             body = x;
             break;
         }

@@ -106,6 +106,27 @@ TEST_CASE("wrong types, missing and unknown keys are bad_message") {
     CHECK(code_of(std::string(buf.data(), buf.size())) == "bad_message");
 }
 
+TEST_CASE("WELCOME's periods are finite, > 0 and at most 1e6 s") {
+    // 1e300 s was accepted, and the participant's heartbeat thread overflowed converting it to its clock's
+    // integer nanoseconds (a review, 2026-11-28); 1e6 s is far above the scene's own bounds (60 s, 3600 s).
+    auto welcome = [](double heartbeat_s, double timeout_s) {
+        return code_of(envelope(
+            [&](Packer& pk) {
+                pk.pack_map(3);
+                pk.pack("version"); pk.pack(1);
+                pk.pack("heartbeat_s"); pk.pack(heartbeat_s);
+                pk.pack("timeout_s"); pk.pack(timeout_s);
+            },
+            "WELCOME"));
+    };
+    CHECK(welcome(0.5, 3.0) == "accepted");
+    CHECK(welcome(1e6, 1e6) == "accepted");
+    CHECK(welcome(1e300, 3.0) == "bad_message");
+    CHECK(welcome(0.5, 1e300) == "bad_message");
+    CHECK(welcome(0.0, 3.0) == "bad_message");
+    CHECK(welcome(0.5, std::nan("")) == "bad_message");
+}
+
 TEST_CASE("a refusal names the offending message's seq where it could be read, else 0") {
     // docs/protocol.md, "Envelope": the ERROR answering it carries that seq and in_reply_to.
     auto seq_of = [](const std::string& bytes) {
