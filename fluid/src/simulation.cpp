@@ -164,7 +164,9 @@ Simulation2D::Simulation2D(const FluidSettings& settings, Scene2D scene, double 
         step_log_ = std::make_unique<std::ofstream>(s_.step_log, std::ios::app);
         if (!*step_log_) throw SolverError("bad_config", "cannot open step_log file '" + s_.step_log + "'");
         step_log_->precision(17);  // t must tell steps of 1e-5 s apart at t = 10 s and more
-        *step_log_ << "step,t,dt,iterations,max_density_error\n";
+        *step_log_ << "step,t,dt,iterations,max_density_error\n" << std::flush;
+        // A file that opens but takes no bytes (/dev/full, a full disk) is found here, before the first step.
+        if (!*step_log_) throw SolverError("bad_config", "cannot write step_log file '" + s_.step_log + "'");
     }
     grid_.configure(domain_lo_, domain_hi_, support_, s_.periodic);
 }

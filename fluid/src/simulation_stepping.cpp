@@ -328,7 +328,14 @@ WindowStats Simulation2D::advance(double t_end, std::uint32_t substeps, const st
         }
     }
     if (ws.steps == 0) ws.dt_min = 0.0;
-    if (step_log_) step_log_->flush();  // a window's lines are on disk when its reply goes out
+    if (step_log_) {
+        step_log_->flush();  // a window's lines are on disk when its reply goes out
+        // One that can no longer be written (a full disk) would lose every line after it without a word: the
+        // run stops; the record holds everything up to the window before this one.
+        if (!*step_log_)
+            throw protocol::SolverError("internal", "cannot write step_log file '" + s_.step_log + "' after step " +
+                                                        std::to_string(st_.step) + " at t = " + fmt(st_.t) + " s");
+    }
     return ws;
 }
 

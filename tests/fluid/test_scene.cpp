@@ -121,6 +121,16 @@ TEST_SUITE("scene") {
         std::remove(log.c_str());
     }
 
+    TEST_CASE("a step log that cannot be written is named, not left short without a word") {
+        // /dev/full takes the file open and fails every write: the log's lines were lost and the run went on
+        // (a review, 2026-11-28). Its header is flushed at INIT, so the scene is refused there, naming the file.
+        sphfsi::fluid::SphSolver s;
+        sphfsi::protocol::InitRequest req;
+        req.config = with(wcsph(dam_break(0.1 / 10)), {{"step_log", "/dev/full"}});
+        CHECK_THROWS_WITH_AS(s.init(req), doctest::Contains("cannot write step_log file '/dev/full'"),
+                             sphfsi::protocol::SolverError);
+    }
+
     TEST_CASE("spray from a dam break against a thin obstacle stays out of the walls") {
         // The fluid side of scenarios/elastic_obstacle.toml (Walhorn et al. 2005) with the cantilever as a static
         // block from x = 2a = 0.292 m, at the scene's default dp = 4 mm and its fluid settings (repulsive wall force
