@@ -18,8 +18,20 @@ std::string own_directory() {
     return std::filesystem::read_symlink("/proc/self/exe").parent_path().string();
 }
 
+// The reference runtime's statuses (docs/protocol.md, BYE) carry their reason along: a status 4 named as a
+// bare exit blamed the participant for a coordinator stopped past timeout_s (a kill probe, 2026-11-28). A
+// foreign participant may mean something else by them, hence "the reference runtime's".
 std::string describe_exit(int status) {
-    if (WIFEXITED(status)) return "exited with status " + std::to_string(WEXITSTATUS(status));
+    if (WIFEXITED(status)) {
+        const int code = WEXITSTATUS(status);
+        const char* meaning = code == 3   ? "refused, or no WELCOME"
+                              : code == 4 ? "it heard nothing from the coordinator for run.timeout_s: was the "
+                                            "coordinator stopped, or starved of CPU?"
+                              : code == 130 ? "stopped by SIGTERM or SIGINT"
+                                            : nullptr;
+        return "exited with status " + std::to_string(code) +
+               (meaning ? std::string(" (the reference runtime's status for: ") + meaning + ")" : "");
+    }
     if (WIFSIGNALED(status))
         return "was killed by signal " + std::to_string(WTERMSIG(status)) + " (" + strsignal(WTERMSIG(status)) + ")";
     return "stopped (status " + std::to_string(status) + ")";
