@@ -203,6 +203,16 @@ void FrameDynamics::check_finite(const Vector& x, const char* quantity, double t
                                               num(t) + "; reduce dt_max or check the loads");
 }
 
+// "at node N (uy)": where the largest entry of a full-dof vector is; a Newton that does not converge names
+// where it fails, as every other failure names its node (a kill probe, 2026-11-28).
+std::string FrameDynamics::largest_entry(const Vector& x) const {
+    static const char* component[3] = {"ux", "uy", "theta"};
+    Eigen::Index at = 0;
+    if (x.size() == 0) return "nowhere";
+    x.cwiseAbs().maxCoeff(&at);
+    return "at node " + std::to_string(at / 3) + " (" + component[at % 3] + ")";
+}
+
 void FrameDynamics::check_bounded(const Vector& u, double t) const {
     // Finite is not enough: a linear model happily returns 1e295 m. Beyond a thousand times the
     // structure's size the numbers mean nothing (a blown-up coupling or absurd forces).
@@ -352,9 +362,9 @@ StepReport FrameDynamics::step(double h, const Vector& extra) {
                 throw SolverError("not_converged",
                                   "structure: step " + std::to_string(state_.step + 1) + ", t=" + num(state_.t + h) +
                                       ", dt=" + num(h) + ": Newton residual " + num(norm) + " (relative " +
-                                      num(report.residual) + ", tolerance " + num(tol) + ") after " +
-                                      std::to_string(k) + " iterations; reduce time.dt_max or raise "
-                                      "newton.max_iterations");
+                                      num(report.residual) + ", tolerance " + num(tol) + ", largest " +
+                                      largest_entry(model_.T * r) + ") after " + std::to_string(k) +
+                                      " iterations; reduce time.dt_max or raise newton.max_iterations");
             if (!solver_.factorize(effective(Kt)))
                 throw SolverError("not_converged", "structure: step " + std::to_string(state_.step + 1) + ", t=" +
                                                        num(state_.t + h) + ": singular tangent (buckling?) at Newton "

@@ -189,6 +189,9 @@ TEST_CASE("Newton that cannot converge stops with not_converged, naming step, ti
         CHECK(m.find("t=0.05") != std::string::npos);
         CHECK(m.find("Newton residual") != std::string::npos);
         CHECK(m.find("after 1 iterations") != std::string::npos);
+        // Where: the node and component of the largest residual entry, here the loaded tip's (node 10) along
+        // the load (it named none before; a kill probe).
+        CHECK(m.find("largest at node 10 (uy)") != std::string::npos);
     }
 }
 }
