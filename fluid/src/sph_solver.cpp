@@ -293,7 +293,9 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
     // No SAVE here: the saved copy is a second full particle state (about 100 bytes per particle), and only
     // implicit coupling, which SAVEs at every window start, ever restores one.
     protocol::InitReply reply;
-    reply.dt_wanted = sim_->stable_dt();
+    // A floor already reached at the start is the first ADVANCE's failure, as at a window's end: the start is
+    // whole and becomes the record's t0 frame (INIT had thrown, and the record kept no frame; a kill probe).
+    reply.dt_wanted = next_step_wanted();
     Value::Table info;
     info["particles"] = Value(static_cast<std::int64_t>(sim_->particles().size()));
     info["fluid_particles"] = Value(static_cast<std::int64_t>(sim_->fluid_count()));

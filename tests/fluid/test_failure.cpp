@@ -133,6 +133,20 @@ TEST_SUITE("failure") {
         CHECK(checkpoint_refused.find("below the floor") != std::string::npos);
     }
 
+    TEST_CASE("a step floor already reached at INIT is answered READY; the first ADVANCE stops, naming it") {
+        // The start is whole and the coordinator records it as its t0 frame; INIT had thrown, and a run that
+        // stopped there kept no frame at all (a kill probe, 2026-11-28). dt_min = 1 s is above any stable step.
+        auto s = start(with(wcsph(dam_break(0.1 / 16)), {{"time.dt_min", 1.0}}));
+        CHECK(s->simulation().step_count() == 0);
+        sphfsi::protocol::Progress progress;
+        sphfsi::protocol::AdvanceRequest req;
+        req.t = 0.0;
+        req.dt = 1.0;
+        CHECK_THROWS_WITH_AS(s->advance(req, progress), doctest::Contains("below the floor dt_min = 1 s"),
+                             sphfsi::protocol::SolverError);
+        CHECK(s->simulation().step_count() == 0);
+    }
+
     TEST_CASE("a clock whose steps no longer move it stops the run instead of stepping in place") {
         // At t0 = 1e15 s a double's spacing is 0.125 s and the stable step about 1e-4 s: t + dt was t, and
         // the adaptive loop stepped for ever at the same time (a review, 2026-11-28). The window itself (1 s)
