@@ -176,6 +176,18 @@ int Runner::execute() {
                       << " completed; there is nothing to resume (start a new run to change it)" << std::endl;
             return 2;
         }
+        // A record without a checkpoint beside it stopped before its first one (checkpoints come every
+        // run.checkpoint_interval, by default 10 output intervals): "no checkpoint at ... (was the run started
+        // with a checkpoint interval?)" suggested a setting was missing (a kill probe, 2026-11-28).
+        if (!std::filesystem::exists(opt_.out_dir / "checkpoint.bin") && std::filesystem::exists(opt_.out_dir / "record.h5")) {
+            const std::string status = record_status(opt_.out_dir / "record.h5");
+            std::cerr << "sphfsi: the run in " << opt_.out_dir.string() << " stopped before its first checkpoint"
+                      << (status.empty() ? std::string() : " (its record says: " + status + ")")
+                      << "; there is nothing to resume from: start it again (--overwrite), with a shorter "
+                         "run.checkpoint_interval to resume earlier"
+                      << std::endl;
+            return 2;
+        }
         resume = read_checkpoint(opt_.out_dir / "checkpoint.bin");
         // The scene as the run saw it, not as the file may read now; paths stay relative to the original.
         scene_ = parse_scene(resume->scene_text, resume->scene_file, resume->overrides);

@@ -443,7 +443,8 @@ def test_a_fresh_run_leaves_nothing_of_an_earlier_run_to_resume():
     with h5py.File(os.path.join(out, "record.h5"), "r+", locking=False) as f:
         f.attrs["status"] = "running"  # as if killed before its first checkpoint
     code, text = harness.sphfsi("run", "--resume", out)
-    assert code == 1 and "no checkpoint at" in text, (code, text)
+    # Said as it is (it read "no checkpoint at ... (was the run started with a checkpoint interval?)").
+    assert code == 2 and "stopped before its first checkpoint (its record says: running)" in text, (code, text)
 
 
 def test_a_completed_run_is_not_resumed():
