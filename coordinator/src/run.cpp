@@ -585,8 +585,8 @@ void Runner::loop() {
         WindowOutcome o = coupled_ ? scheme_->run(plan, iface_) : advance_alone(plan);
         double wall = std::chrono::duration<double>(Clock::now() - start).count();
         t_ = (plan.t + plan.dt >= t_stop - eps) ? t_stop : plan.t + plan.dt;
-        if (fluid_) fluid_dt_ = step_wanted("fluid", o.fluid.reply.dt_wanted, "ADVANCED");
-        if (structure_) structure_dt_ = step_wanted("structure", o.structure.reply.dt_wanted, "ADVANCED");
+        if (fluid_) fluid_dt_ = o.fluid.reply.dt_wanted;
+        if (structure_) structure_dt_ = o.structure.reply.dt_wanted;
         ++windows_;
         steps_ += fluid_ ? o.fluid.reply.substeps : o.structure.reply.substeps;
         InterfaceWork work;
@@ -601,6 +601,9 @@ void Runner::loop() {
             if (const std::string off = account_energy(energy_limits_, windows_, t_, o, work, iface_); !off.empty())
                 log("warning: " + off);
         if (!o.stop_run.empty()) throw std::runtime_error(o.stop_run);
+        // The window is whole and recorded; a step that collapsed is the next one's failure.
+        if (fluid_) step_wanted("fluid", fluid_dt_, "ADVANCED");
+        if (structure_) step_wanted("structure", structure_dt_, "ADVANCED");
         progress_->update(t_, steps_);
         // Frames at k * output_interval, and the end's state whether or not end_time is one of those.
         if (t_ >= output_index_ * output_dt_ - eps || t_ >= end_ - eps) snapshot_all();

@@ -201,9 +201,14 @@ def test_frames_that_cannot_be_recorded_are_named():
 def test_a_step_that_collapsed_stops_the_run():
     """A structure alone under a sine load steps once per window at the step it wants; one that wanted 1e-19 s
     was given 1e-19 s windows, 7000 a second, for ever (a review, 2026-11-28)."""
-    run_fault("tiny_step", "error: structure ADVANCED wants a step of 9.9999999999999998e-20 s, below the "
-                           "coordinator's time resolution of 1e-10 s", 5,
-              extra=("--set", 'load.profile="sine"', "--set", "load.force=[1.0, 0.0]"))
+    out = harness.out_dir("tiny_step")
+    code, text = harness.sphfsi("run", BAD, "--out", out, "--quiet", "--set", "structure.mode=tiny_step", "--set",
+                                'load.profile="sine"', "--set", "load.force=[1.0, 0.0]", timeout=30)
+    assert code == 1 and ("error: structure ADVANCED wants a step of 9.9999999999999998e-20 s, below the "
+                          "coordinator's time resolution of 1e-10 s") in text, (code, text)
+    assert_failed_by_structure(out)
+    with harness.record(os.path.join(out, "record.h5")) as f:  # the window that asked for it was whole
+        assert len(f["windows/t"]) == 1, len(f["windows/t"])
 
 
 def test_a_stat_that_appears_late_is_named_not_recorded():
