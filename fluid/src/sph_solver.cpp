@@ -204,7 +204,8 @@ protocol::InitReply SphSolver::init(const protocol::InitRequest& request) {
         coupling->end_window();
         // Where the structure starts, too: a deflected start (INIT's interface_state) 5 m above a 0.4 m tank was
         // accepted (a review, 2026-11-27).
-        // A fresh start only: a resume's interface_state is where the run had got to, whose windows were checked (advance).
+        // A fresh start only: a resume's interface_state is where the run had got to, which every window's
+        // end was checked against (advance).
         if (u0 && request.state.empty() && u0->values.size() == 2 * request.interface->vertices.rows()) {
             protocol::InterfaceMesh started = *request.interface;
             for (std::size_t i = 0; i < started.vertices.values.size(); ++i) started.vertices.values[i] += u0->values[i];
