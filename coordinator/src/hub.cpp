@@ -1,6 +1,8 @@
 #include "sphfsi/coordinator/hub.hpp"
 
 #include <algorithm>
+#include <chrono>
+#include <thread>
 
 #include "sphfsi/protocol/codec.hpp"
 
@@ -52,7 +54,16 @@ void Hub::send_raw(const std::string& identity, const Message& m, bool droppable
         // user's stop, not the participant's death. The blocking frame is the identity, the first, so no
         // half-sent message is left behind on the socket.
         if (e.num() == EINTR && g_interrupted) throw Interrupted();
-        if (role != identity_role_.end()) throw ParticipantFailure(role->second, "died", "cannot be reached: " + std::string(e.what()));
+        if (role != identity_role_.end()) {
+            // A participant killed a moment ago is unreachable before its exit is reaped, and its exit ("was
+            // killed by signal 9") says more than "Host unreachable" did (a kill probe, 2026-11-28): the exit is
+            // waited for, briefly.
+            for (const auto until = Clock::now() + std::chrono::milliseconds(500); launcher_ && !closing_ && Clock::now() < until;) {
+                if (auto exited = launcher_->poll_exited()) report_exit(exited->first, exited->second);
+                std::this_thread::sleep_for(std::chrono::milliseconds(10));
+            }
+            throw ParticipantFailure(role->second, "died", "cannot be reached: " + std::string(e.what()));
+        }
         // a stranger that went away: nothing to do
     }
     if (!taken && !droppable && role != identity_role_.end())

@@ -29,6 +29,7 @@ section picks the fault:
   mode = "info_not_utf8"  sends READY info {"s": <the 4 bytes ff fe 1b 58, not UTF-8>}
   mode = "info_nul"       sends READY info {"s": "a\\0b"} (a NUL inside)
   mode = "software_nul"   says HELLO software "mis\\0behaving" (from the env, like "version")
+  mode = "exit_after_reply"  answers the first ADVANCE, then closes its socket and exits with status 9 at once
   mode = "ready_dt_zero"  sends READY with dt_wanted 0
   mode = "stats_text"     reports ADVANCED stats with a string value
   mode = "stats_bad_name" reports ADVANCED stats named "a/b" (it would become an HDF5 group)
@@ -183,6 +184,11 @@ def main():
                       else {"kinetic_energy": float("nan")} if mode == "stats_nan"
                       else {f"s{i}": 1.0 for i in range(300)} if mode == "stats_many"
                       else {"late": 1.0} if mode == "stats_late" and body["t"] > 0 else {}})
+                if mode == "exit_after_reply":
+                    with lock:
+                        sock.close(linger=2000)
+                        sock.context.term()  # returns once the reply is sent
+                    os._exit(9)
         elif kind == "SNAPSHOT" and mode == "hang_snapshot":
             time.sleep(3600)
         elif kind == "SNAPSHOT" and mode == "snapshot_error" and now >= fail_at - 1e-9:
