@@ -178,7 +178,7 @@ public:
         zmq::context_t ctx(1);
         Link link(ctx, opt_.endpoint);
         link_ = &link;
-        if (!handshake()) return 3;
+        if (!handshake()) return g_stop ? 130 : 3;  // a signal while waiting is a stop, not a refusal
         std::thread beat([this] { heartbeat_loop(); });
         auto stop_beat = [&] {
             {
@@ -226,7 +226,8 @@ private:
         hello.version = kProtocolVersion;
         auto deadline = Clock::now() + std::chrono::duration<double>(opt_.startup_timeout_s);
         if (!link_->send(hello, [&] { return g_stop || Clock::now() >= deadline; })) {
-            log("HELLO could not be sent to " + opt_.endpoint + " within " + std::to_string(opt_.startup_timeout_s) + " s");
+            if (g_stop) log("stopped by signal before HELLO could be sent");
+            else log("HELLO could not be sent to " + opt_.endpoint + " within " + std::to_string(opt_.startup_timeout_s) + " s");
             return false;
         }
         zmq::message_t raw;
@@ -256,7 +257,8 @@ private:
             timeout_s_ = w.timeout_s;
             return true;
         }
-        log("no WELCOME from " + opt_.endpoint + " within " + std::to_string(opt_.startup_timeout_s) + " s");
+        if (g_stop) log("stopped by signal before WELCOME");
+        else log("no WELCOME from " + opt_.endpoint + " within " + std::to_string(opt_.startup_timeout_s) + " s");
         return false;
     }
 

@@ -242,6 +242,24 @@ def test_a_welcome_outside_what_was_offered_is_refused():
         assert code == 3 and why in text, (code, text)
 
 
+def test_sigterm_before_welcome_exits_130_saying_so():
+    """Stopped while it waits for WELCOME, the runtime exited 3 ("no WELCOME ... within 10 s", after 1 s),
+    which the coordinator names "refused, or no WELCOME" (a review, 2026-11-28). A stop is 130."""
+    c = Coordinator()
+    with tempfile.TemporaryFile(mode="w+") as log:
+        proc = subprocess.Popen([os.path.join(harness.BIN, "sphfsi-structure"), "--connect", c.endpoint, "--name",
+                                 "structure"], env=dict(os.environ, SPHFSI_TOKEN=TOKEN), stdout=log,
+                                stderr=subprocess.STDOUT, text=True)
+        hello = c.receive()
+        assert hello is not None and hello["type"] == "HELLO", hello
+        proc.send_signal(signal.SIGTERM)  # no WELCOME comes
+        code = proc.wait(timeout=10)
+        log.seek(0)
+        text = log.read()
+    c.close()
+    assert code == 130 and "stopped by signal before WELCOME" in text, (code, text)
+
+
 def test_init_with_a_start_time_that_is_not_finite_is_bad_message_and_may_be_retried():
     # A NaN or infinite t0 used to be taken as the solver's clock: every ADVANCE then failed with bad_state.
     for p in programs():
