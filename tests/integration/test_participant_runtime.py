@@ -276,6 +276,28 @@ def test_init_with_a_start_time_that_is_not_finite_is_bad_message_and_may_be_ret
             s.close()
 
 
+def test_init_from_a_state_that_cannot_be_used_is_bad_config():
+    """docs/protocol.md, INIT: a state the participant cannot read, or one at another time than t0, is
+    bad_config. rigid_plate.py answered bad_message (a review, 2026-11-28)."""
+    for p in programs():
+        s = Session(p.argv)
+        try:
+            reply = s.c.request("INIT", 2, {"config": p.config, "t0": 0.0, "interface": None, "state": b"not a state"})
+            expect_error(reply, 2, "bad_config")
+            s.init(p.config, seq=3)
+            state = s.c.request("CHECKPOINT", 4, {})
+            assert state is not None and state["type"] == "STATE", (p.name, brief(state))
+        finally:
+            s.close()
+        s = Session(p.argv)
+        try:  # the checkpoint, taken at t = 0, offered at t0 = 1 s
+            reply = s.c.request("INIT", 2, {"config": p.config, "t0": 1.0, "interface": None,
+                                            "state": state["body"]["state"]})
+            expect_error(reply, 2, "bad_config")
+        finally:
+            s.close()
+
+
 def test_init_after_ready_is_bad_state_and_leaves_the_state_alone():
     # A second INIT used to re-initialise the solver silently, back to its t0.
     for p in programs():

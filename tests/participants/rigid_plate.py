@@ -744,9 +744,10 @@ class Participant:
         except Exception:
             ok = False
         if not ok:
-            raise bad("INIT state is not a %s checkpoint of this program" % STATE_FORMAT)
+            # docs/protocol.md, INIT: a state the participant cannot use is bad_config (it was bad_message here)
+            raise ProtocolError("bad_config", "INIT state is not a %s checkpoint of this program" % STATE_FORMAT)
         if abs(s["core"]["t"] - t0) > 1e-9 * abs(t0):  # docs/protocol.md, INIT: one instant, or refused
-            raise bad("INIT t0 = %.17g but the checkpoint is at t = %.17g" % (t0, s["core"]["t"]))
+            raise ProtocolError("bad_config", "INIT t0 = %.17g but the checkpoint is at t = %.17g" % (t0, s["core"]["t"]))
         plate.set_core(s["core"])
         plate.saved = s["saved"]
         self.progress = s["progress"]
