@@ -193,7 +193,7 @@ int Runner::execute() {
         scene_ = parse_scene(resume->scene_text, resume->scene_file, resume->overrides);
         t_ = resume->t;  // an interruption before INIT completes is reported at the checkpoint's time
     } else {
-        scene_ = load_scene(opt_.scene, opt_.overrides);
+        scene_ = load_scene(opt_.scene, opt_.overrides, opt_.listen.empty());
         scene_.file = std::filesystem::absolute(opt_.scene);
     }
     std::filesystem::create_directories(opt_.out_dir);  // only once the scene is known to be valid

@@ -138,11 +138,12 @@ std::string unrunnable(const std::string& program) {
 }
 }  // namespace
 
-Scene load_scene(const std::filesystem::path& file, const std::vector<std::string>& overrides) {
+Scene load_scene(const std::filesystem::path& file, const std::vector<std::string>& overrides, bool programs_run) {
     Scene scene = parse_scene(read_file(file), file, overrides);
     // A participant command that cannot start passed `check`, and a run then failed only after creating its
-    // record (with --overwrite, in place of the earlier one; a review, 2026-11-28). With --listen the command
-    // is not used, but a scene that names one should still name one that exists.
+    // record (with --overwrite, in place of the earlier one; a review, 2026-11-28). Under --listen the
+    // commands are not run, and the program may well live on another machine: nothing is looked for then.
+    if (!programs_run) return scene;
     for (const char* role : {"fluid", "structure"})
         if (const auto argv = scene.custom_program(role); argv && !argv->empty())
             if (const std::string why = unrunnable(argv->front()); !why.empty())

@@ -27,7 +27,9 @@ void apply_override(Value& root, const std::string& assignment);
 
 // Reads, overrides and validates. Throws ConfigError with every problem, each naming the file, the
 // line where known, the key and the allowed values. Nothing runs on an invalid scene.
-Scene load_scene(const std::filesystem::path& file, const std::vector<std::string>& overrides = {});
+// `programs_run`: the [participants] commands will be started (not under --listen), so each must exist.
+Scene load_scene(const std::filesystem::path& file, const std::vector<std::string>& overrides = {},
+                 bool programs_run = true);
 // The same from the scene's text (e.g. as a checkpoint recorded it); `file` names it in messages and
 // anchors relative program paths.
 Scene parse_scene(std::string text, const std::filesystem::path& file, const std::vector<std::string>& overrides = {});
