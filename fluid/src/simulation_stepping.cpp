@@ -276,10 +276,11 @@ double Simulation2D::take_step(double dt, double t_after, bool adaptive, WindowS
 }
 
 // Far from t = 0 a double's spacing outgrows the step (0.125 s at t = 1e15 s, against about 1e-4 s): t + dt
-// is t, and the adaptive loop stepped for ever at one time (a review, 2026-11-28).
+// is t, and the adaptive loop stepped for ever at one time (a review, 2026-11-28). "diverged", as a step below
+// its floor is: the window may have begun (bad_state would say that nothing had changed; docs/protocol.md).
 void Simulation2D::require_clock_moves(double dt) const {
     if (!(st_.t + dt > st_.t))
-        throw protocol::SolverError("bad_state", "step " + std::to_string(st_.step) + " at t = " + fmt(st_.t) +
+        throw protocol::SolverError("diverged", "step " + std::to_string(st_.step) + " at t = " + fmt(st_.t) +
                                                      " s: a step of " + fmt(dt) +
                                                      " s does not move the clock (a double's spacing there is " +
                                                      fmt(std::nextafter(st_.t, INFINITY) - st_.t) +
