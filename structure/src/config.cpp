@@ -42,8 +42,10 @@ void each(const Value& table, const char* key, F&& f) {
 
 }  // namespace
 
-double History::factor(double t) const {
-    if (t < start_time || (end_time && t >= *end_time)) return 0.0;
+double History::factor(double t, Side side) const {
+    const bool off = side == Side::Right ? (t < start_time || (end_time && t >= *end_time))
+                                         : (t <= start_time || (end_time && t > *end_time));
+    if (off) return 0.0;
     const double s = t - start_time;
     switch (kind) {
         case Kind::Constant: return 1.0;

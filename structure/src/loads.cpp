@@ -1,5 +1,7 @@
 #include "sphfsi/structure/loads.hpp"
 
+#include <algorithm>
+
 #include "sphfsi/protocol/solver.hpp"
 #include "sphfsi/structure/assembly.hpp"
 
@@ -39,11 +41,24 @@ SceneLoads::SceneLoads(const StructureConfig& config, const Model& model) : mode
     }
 }
 
-Vector SceneLoads::at(double t, const Vector& u, bool follow_rotation) const {
+std::vector<double> SceneLoads::switch_times() const {
+    std::vector<double> times;
+    auto add = [&](const History& h) {
+        times.push_back(h.start_time);
+        if (h.end_time) times.push_back(*h.end_time);
+    };
+    for (const auto& p : point_) add(p.history);
+    for (const auto& d : distributed_) add(d.history);
+    std::sort(times.begin(), times.end());
+    times.erase(std::unique(times.begin(), times.end()), times.end());
+    return times;
+}
+
+Vector SceneLoads::at(double t, const Vector& u, bool follow_rotation, History::Side side) const {
     const Model& model = *model_;
     Vector f = Vector::Zero(model.dof_count());
     for (const auto& p : point_) {
-        const double s = p.history.factor(t);
+        const double s = p.history.factor(t, side);
         if (s == 0.0) continue;
         f.segment<2>(3 * p.node) += s * p.force;
         f[3 * p.node + 2] += s * p.moment;
@@ -51,7 +66,7 @@ Vector SceneLoads::at(double t, const Vector& u, bool follow_rotation) const {
     if (distributed_.empty()) return f;
     const auto angles = element_angles(model, follow_rotation ? u : Vector());
     for (const auto& d : distributed_) {
-        const double s = d.history.factor(t);
+        const double s = d.history.factor(t, side);
         if (s == 0.0) continue;
         for (int ei : model.member_elements[d.member]) {
             const Element& e = model.elements[ei];

@@ -91,19 +91,45 @@ AdvanceReply StructureSolver::advance(const AdvanceRequest& request, Progress& p
     const double t0 = d.state().t;
     protocol::check_window(request, t0, "structure");
 
-    std::uint32_t n = request.substeps;
-    if (n == 0) {
-        const auto count = substeps_to_cover(request.dt, dt_wanted_);
-        if (!count)
-            throw SolverError("bad_message", "structure: a window of " + seconds(request.dt) + " needs more sub-steps of " +
-                                                seconds(dt_wanted_) + " than a count can hold (time.dt_max is too small)");
-        n = *count;
+    // The sub-steps as runs of equal ones: (end time, step, count). Asked for a count, that many equal ones.
+    // Left to choose (substeps 0), the fewest no longer than the step it wants, landing on every time a scene
+    // load switches on or off: sampled only at step ends, a pulse shorter than a step between two ends was
+    // lost (50 us of 100 kN: the beam never moved; a review, 2026-11-28), and one that ends are placed on
+    // is applied whole (FrameDynamics::step).
+    struct Run {
+        double end, h;
+        std::uint32_t count;
+    };
+    std::vector<Run> runs;
+    const double t_end = request.t + request.dt;
+    if (request.substeps > 0) {
+        runs.push_back({t_end, request.dt / request.substeps, request.substeps});
+    } else {
+        std::vector<double> ends;
+        for (double ts : d.load_switch_times())
+            if (ts > t0 && ts < t_end) ends.push_back(ts);
+        ends.push_back(t_end);
+        double from = t0;
+        for (double to : ends) {
+            const auto count = substeps_to_cover(to - from, dt_wanted_);
+            if (!count)
+                throw SolverError("bad_message", "structure: a window of " + seconds(request.dt) + " needs more sub-steps of " +
+                                                    seconds(dt_wanted_) + " than a count can hold (time.dt_max is too small)");
+            runs.push_back({to, (to - from) / *count, *count});
+            from = to;
+        }
     }
-    const double h = request.dt / n;
-    // The integrators divide by h^2 (Newmark's 1/(beta h^2)): a sub-step whose square underflows is not one
-    // they can take. It was reported as an internal "singular effective matrix" with no step or time.
-    if (!std::isfinite(4.0 / (h * h)))  // 1/beta <= 4 for every integrator here (Newmark and generalized-alpha)
-        throw SolverError("bad_message", "structure: a sub-step of " + seconds(h) + " is too short to integrate (1/h^2 overflows)");
+    std::uint64_t n = 0;
+    for (const Run& r : runs) {
+        n += r.count;
+        // The integrators divide by h^2 (Newmark's 1/(beta h^2)): a sub-step whose square underflows is not
+        // one they can take. It was reported as an internal "singular effective matrix" with no step or time.
+        if (!std::isfinite(4.0 / (r.h * r.h)))  // 1/beta <= 4 for every integrator here (Newmark and generalized-alpha)
+            throw SolverError("bad_message", "structure: a sub-step of " + seconds(r.h) + " is too short to integrate (1/h^2 overflows)");
+    }
+    if (n > UINT32_MAX)
+        throw SolverError("bad_message", "structure: a window of " + seconds(request.dt) + " needs more sub-steps of " +
+                                            seconds(dt_wanted_) + " than a count can hold (time.dt_max is too small)");
 
     const F64Array* force = nullptr;
     if (auto it = request.inputs.find("force"); it != request.inputs.end()) {
@@ -122,22 +148,27 @@ AdvanceReply StructureSolver::advance(const AdvanceRequest& request, Progress& p
     AdvanceReply reply;
     int max_iterations = 0;
     double max_residual = 0.0;  // Newton may stop on its round-off floor, up to sqrt(tolerance): recorded
-    for (std::uint32_t k = 0; k < n; ++k) {
-        // Moment arms of the vertex forces follow the cross-sections: taken at each sub-step's start.
-        const Vector extra = force ? interface_->lump(*force, d.state().u, depth) : Vector();
-        const StepReport r = d.step(h, extra);
-        // Saturates: billions of sub-steps times Newton iterations would wrap the protocol's uint32 (a review).
-        reply.solver_iterations = static_cast<std::uint32_t>(
-            std::min<std::uint64_t>(std::uint64_t{reply.solver_iterations} + static_cast<std::uint64_t>(r.iterations), UINT32_MAX));
-        max_iterations = std::max(max_iterations, r.iterations);
-        max_residual = std::max(max_residual, r.residual);
-        progress.tick();
+    for (const Run& run : runs) {
+        const double run_start = d.state().t;
+        for (std::uint32_t k = 0; k < run.count; ++k) {
+            // Moment arms of the vertex forces follow the cross-sections: taken at each sub-step's start.
+            const Vector extra = force ? interface_->lump(*force, d.state().u, depth) : Vector();
+            // Each step ends where it should, exactly (no drift from summing h): at a load's switch the sum
+            // landed a hair past it, and the step before took the load early (a pulse twice its impulse).
+            const double t_after = k + 1 == run.count ? run.end : run_start + (k + 1) * run.h;
+            const StepReport r = d.step(run.h, extra, t_after);
+            // Saturates: billions of sub-steps times Newton iterations would wrap the protocol's uint32 (a review).
+            reply.solver_iterations = static_cast<std::uint32_t>(std::min<std::uint64_t>(
+                std::uint64_t{reply.solver_iterations} + static_cast<std::uint64_t>(r.iterations), UINT32_MAX));
+            max_iterations = std::max(max_iterations, r.iterations);
+            max_residual = std::max(max_residual, r.residual);
+            progress.tick();
+        }
     }
-    d.state().t = request.t + request.dt;  // land exactly on the window end, no round-off drift
 
     reply.t = d.state().t;
     reply.dt_wanted = dt_wanted_;
-    reply.substeps = n;
+    reply.substeps = static_cast<std::uint32_t>(n);
     reply.outputs["displacement"] = interface_->displacement(d.state().u);
     reply.outputs["velocity"] = interface_->velocity(d.state().u, d.state().v);
     const Energies e = per_metre_of_depth(d);

@@ -44,7 +44,10 @@ void add_history_keys(TableSchema& t) {
     t.number("frequency", "frequency of the sine (history = \"sine\")").unit("Hz").greater_than(0).at_most(1e6).fallback(1.0);
     t.number("phase", "phase of the sine at start_time (history = \"sine\")").unit("rad").fallback(0.0);
     t.number("start_time", "the load is zero before this time").unit("s").fallback(0.0);
-    t.number("end_time", "the load is zero from this time on; absent = never switched off").unit("s");
+    t.number("end_time", "the load is zero from this time on; absent = never switched off. Steps the structure "
+                         "chooses (alone, between outputs) end on start_time and end_time, so a pulse shorter "
+                         "than a step is applied whole; sub-steps the coupling counts do not, and sample it at their ends")
+        .unit("s");
 }
 
 void add_point_load_keys(TableSchema& t) {

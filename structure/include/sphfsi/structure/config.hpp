@@ -22,7 +22,10 @@ struct History {
     enum class Kind { Constant, Ramp, Sine } kind = Kind::Constant;
     double ramp_time = 1.0, frequency = 1.0, phase = 0.0, start_time = 0.0;
     std::optional<double> end_time;
-    double factor(double t) const;
+    // The load switches on at start_time and off at end_time: at those instants a step that ends there takes
+    // the value from its left (`Side::Left`), a step that starts there the value from its right.
+    enum class Side { Left, Right };
+    double factor(double t, Side side = Side::Right) const;
 };
 
 struct Material {

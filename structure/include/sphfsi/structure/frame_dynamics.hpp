@@ -69,13 +69,16 @@ public:
     void at_rest(double t0);
 
     // The scene's own loads at time t, on the current configuration.
-    Vector scene_load(double t) const;
+    Vector scene_load(double t, History::Side side = History::Side::Right) const;
+    const std::vector<double>& load_switch_times() const { return load_switches_; }
     // Internal force at u; the tangent and the strain energy when asked for.
     Vector internal_force(const Vector& u, SparseMatrix* tangent = nullptr, double* strain_energy = nullptr) const;
 
     // One implicit step of length h. `extra` (full DOFs, may be empty) is added to the scene loads and
-    // held constant over the step. Throws SolverError not_converged / diverged.
-    StepReport step(double h, const Vector& extra);
+    // held constant over the step. `t_after`: the time the step ends at, exactly (a sum t + h can land a hair
+    // past a load's switch and take the load early); by default t + h. Throws SolverError not_converged /
+    // diverged.
+    StepReport step(double h, const Vector& extra, std::optional<double> t_after = std::nullopt);
 
     // Static equilibrium f_int(u) = load(u) from the current u, in `increments` equal load increments
     // (halved on failure); `load` is evaluated on each Newton iterate's configuration.
@@ -106,6 +109,7 @@ private:
     SparseMatrix M_, K0_, D_;  // D_: the damping matrix unless it turns with the elements (damping(u))
     SparseMatrix alpha_mass_;  // Rayleigh's alpha M: co-rotational steps damp the beta part by deformation
     SceneLoads loads_;
+    std::vector<double> load_switches_;  // loads_.switch_times()
     Modes modes_;
     double rayleigh_alpha_ = 0, rayleigh_beta_ = 0;
     double dt_accuracy_ = 0;

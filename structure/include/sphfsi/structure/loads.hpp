@@ -14,7 +14,10 @@ public:
     // Nodal loads at time t. Distributed loads (and gravity) are dead loads per unit reference
     // length; their fixed-end moments use the element orientation of `u` (the configuration at the
     // start of the step) when `follow_rotation`, else the reference orientation.
-    Vector at(double t, const Vector& u, bool follow_rotation) const;
+    // `side`: at a switch time (History), the value a step ending there sees (Left) or one starting there.
+    Vector at(double t, const Vector& u, bool follow_rotation, History::Side side = History::Side::Right) const;
+    // Every time a load switches on or off, sorted: adaptive stepping lands on them (StructureSolver::advance).
+    std::vector<double> switch_times() const;
 
     bool empty() const { return point_.empty() && distributed_.empty(); }
 
