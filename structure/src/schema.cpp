@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <sstream>
 #include <vector>
 
@@ -93,6 +94,25 @@ bool on_a_node(const std::vector<MemberGeometry>& members, Point p, double tol) 
     return false;
 }
 
+// Two members with a node at p where no member ends: they cross there without a joint (the model builder
+// joins members only at their ends), and a support or load at p would act on one of them, the first listed,
+// while the other moves freely (a review, 2026-11-28).
+std::optional<std::pair<std::size_t, std::size_t>> unjoined_crossing(const std::vector<MemberGeometry>& members, Point p,
+                                                                     double tol) {
+    auto near = [&](Point q) { return std::hypot(q.x - p.x, q.y - p.y) <= tol; };
+    std::vector<std::size_t> with_node;
+    for (std::size_t i = 0; i < members.size(); ++i) {
+        if (near(members[i].a) || near(members[i].b)) return std::nullopt;  // a joint: one node for all
+        for (std::int64_t k = 1; k < members[i].n; ++k)
+            if (near(members[i].node(k))) {
+                with_node.push_back(i);
+                break;
+            }
+    }
+    if (with_node.size() < 2) return std::nullopt;
+    return std::pair{with_node[0], with_node[1]};
+}
+
 // Every table_array entry whose `at` must be a node.
 void check_points_on_nodes(const Value* entries, const std::string& path, const std::vector<MemberGeometry>& members,
                            double tol, Errors& errors) {
@@ -103,6 +123,11 @@ void check_points_on_nodes(const Value* entries, const std::string& path, const 
         if (!on_a_node(members, p, tol))
             errors.add(&e, "key '" + path + "[" + std::to_string(i) + "].at': " + show(p) +
                                " is not a node of any member; nodes are start + k/n_elements (end - start)");
+        else if (const auto crossing = unjoined_crossing(members, p, tol))
+            errors.add(&e, "key '" + path + "[" + std::to_string(i) + "].at': " + show(p) + " is where members[" +
+                               std::to_string(crossing->first) + "] and members[" + std::to_string(crossing->second) +
+                               "] cross without a joint (members join only where one ends); it would hold only "
+                               "one of them: end a member there to join them, or move it");
         ++i;
     }
 }

@@ -90,6 +90,25 @@ TEST_CASE("supports and point loads must sit on nodes") {
     CHECK(mentions(problem(s), "structure.initial.preload[0].at"));
 }
 
+TEST_CASE("a support or load where two members cross without a joint is refused, naming both") {
+    // Interior nodes of crossing members stay apart (members join at their ends): a support there held one
+    // member and the other fell freely (a review, 2026-11-28). Where a member ends, the nodes are one joint.
+    Value s = beam(2);
+    s.as_table_mut()["members"] = Value(Value::Array{
+        table({{"start", vec(-1, 0)}, {"end", vec(1, 0)}, {"n_elements", Value(2)}}),
+        table({{"start", vec(0, -1)}, {"end", vec(0, 1)}, {"n_elements", Value(2)}})});
+    set(s, "supports", Value(Value::Array{table({{"at", vec(0, 0)}, {"type", Value("clamped")}})}));
+    const std::string why = problem(s);
+    CHECK(mentions(why, "structure.supports[0].at"));
+    CHECK(mentions(why, "members[0] and members[1] cross"));
+    set(s, "supports", Value(Value::Array{table({{"at", vec(-1, 0)}, {"type", Value("clamped")}})}));
+    set(s, "point_loads", Value(Value::Array{point_load(0, 0, 0, -1)}));
+    CHECK(mentions(problem(s), "structure.point_loads[0].at"));
+    // Ended there, the second member is joined: one node, no question which.
+    s.as_table_mut()["members"].as_array_mut()[1] = table({{"start", vec(0, 0)}, {"end", vec(0, 1)}, {"n_elements", Value(1)}});
+    CHECK(problem(s) == "");
+}
+
 TEST_CASE("cross-key rules: members, distributed loads, damping, initial state, load times") {
     Value s = beam(10);
     set(s, "members", Value(Value::Array{table({{"start", vec(0, 0)}, {"end", vec(0, 0)}})}));
