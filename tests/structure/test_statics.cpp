@@ -40,6 +40,21 @@ TEST_CASE("cantilever, tip load: deflection P L^3 / (3 EI) and rotation P L^2 / 
     check_close("tip rotation", dof(f, {L, 0}, 2), P * L * L / (2 * EI), 1e-9);
 }
 
+TEST_CASE("a very short member is no mechanism: the static start holds, linear and co-rotational") {
+    // A 1e-5 m stub on the tip made the stiffness's pivot ratio fall below the 1e-14 that stood for "singular",
+    // and the static start was refused as a mechanism (a review, 2026-11-28). Whether the structure can move
+    // without deforming is a question of its geometry and supports, which the modal analysis answers exactly.
+    for (const char* formulation : {"linear", "corotational"}) {
+        CAPTURE(formulation);
+        Value s = beam(10, "clamped", "", formulation);
+        s.as_table_mut()["members"].as_array_mut().push_back(
+            table({{"start", vec(L, 0)}, {"end", vec(L, 1e-5)}, {"n_elements", Value(1)}}));
+        set(s, "point_loads", Value(Value::Array{point_load(L, 0, 0, -1.0)}));  // small: linear and co-rotational agree
+        const auto f = solve(s);
+        check_close("tip deflection", dof(f, {L, 0}, 1), -1.0 * L * L * L / (3 * EI), 1e-6);
+    }
+}
+
 TEST_CASE("cantilever, uniform load: deflection q L^4 / (8 EI), 10 elements") {
     Value s = beam(10);
     set(s, "distributed_loads", Value(Value::Array{table({{"member", Value(0)}, {"q", vec(0, q)}})}));
