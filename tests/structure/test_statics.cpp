@@ -55,6 +55,24 @@ TEST_CASE("a very short member is no mechanism: the static start holds, linear a
     }
 }
 
+TEST_CASE("a loaded structure that can move without deforming has no static start: refused, naming the supports") {
+    // Free, or pinned at one end only (it turns about the pin), under a tip load; no test held this refusal.
+    for (const char* formulation : {"linear", "corotational"})
+        for (const char* left : {"", "pinned"}) {
+            CAPTURE(formulation);
+            CAPTURE(left);
+            Value s = beam(10, left, "", formulation);
+            set(s, "point_loads", Value(Value::Array{point_load(L, 0, 0, P)}));
+            try {
+                solve(s);
+                FAIL("a mechanism was given a static start");
+            } catch (const sphfsi::protocol::SolverError& e) {
+                CHECK(e.code() == "bad_config");
+                CHECK(std::string(e.what()).find("structure.supports: the structure can move without deforming") == 0);
+            }
+        }
+}
+
 TEST_CASE("cantilever, uniform load: deflection q L^4 / (8 EI), 10 elements") {
     Value s = beam(10);
     set(s, "distributed_loads", Value(Value::Array{table({{"member", Value(0)}, {"q", vec(0, q)}})}));
