@@ -340,7 +340,8 @@ StepReport FrameDynamics::step(double h, const Vector& extra, std::optional<doub
         // The balance is affine in u: one solve with the factorization of this step size is exact.
         if (h != factorized_h_) {
             if (!solver_.factorize(effective(K0_)))
-                throw SolverError("internal", "structure: singular effective matrix at dt=" + num(h));
+                throw SolverError("internal", "structure: step " + std::to_string(state_.step + 1) + ", t=" + num(t1) +
+                                                  ": singular effective matrix at dt=" + num(h));
             factorized_h_ = h;
         }
         const Vector r = residual(scale, false);
@@ -455,6 +456,7 @@ int FrameDynamics::solve_static(const std::function<Vector(const Vector&)>& load
     // Load stepping with Newton in each increment; an increment that fails is halved (up to 10 times).
     double lambda = 0.0, increment = 1.0 / increments;
     int halvings = 0;
+    Vector last_residual;  // of the last increment tried, for the message when it stalls
     while (lambda < 1.0 - 1e-14) {
         const double target = std::min(1.0, lambda + increment);
         Vector u = state_.u;
@@ -469,6 +471,7 @@ int FrameDynamics::solve_static(const std::function<Vector(const Vector&)>& load
             const Vector f = target * load(u);
             const Vector fint = internal_force(u, &Kt);
             const Vector r = reduce(fint - f);
+            last_residual = r;
             const double scale = std::max(reduce(fint).norm(), reduce(f).norm());
             if (!std::isfinite(r.norm())) break;
             if (r.norm() <= tol * scale || scale == 0.0 || round_off_floor(k, r.norm(), previous, scale, tol)) {
@@ -494,8 +497,10 @@ int FrameDynamics::solve_static(const std::function<Vector(const Vector&)>& load
             increment *= 0.5;
         } else {
             throw SolverError("not_converged", "structure: static solve stalled at load factor " + num(lambda) +
-                                                   " of 1 after 10 halvings of the increment (limit load or "
-                                                   "snap-through?); raise newton.load_steps");
+                                                   " of 1 after 10 halvings of the increment (residual " +
+                                                   num(last_residual.norm()) + ", largest " +
+                                                   largest_entry(model_.T * last_residual) +
+                                                   "; limit load or snap-through?); raise newton.load_steps");
         }
     }
     state_.v.setZero();

@@ -174,6 +174,25 @@ TEST_CASE("a 1000-element co-rotational model converges despite its residual rou
     CHECK(std::abs(fine - coarse) <= 1e-3 * std::abs(coarse));
 }
 
+TEST_CASE("a static start that cannot converge stops with not_converged, naming its residual and where") {
+    // One Newton iteration per increment under a load that bends the cantilever far: every increment fails and
+    // is halved ten times. The message named neither the residual nor the node (a review, 2026-11-28).
+    Value s = beam(10, "clamped", "", "corotational");
+    set(s, "newton.max_iterations", Value(1));
+    set(s, "initial.static_equilibrium", Value(true));
+    set(s, "point_loads", Value(Value::Array{point_load(L, 0, 0, -50 * EI / (L * L))}));
+    try {
+        FrameDynamics f(config(s));
+        FAIL("expected not_converged");
+    } catch (const sphfsi::protocol::SolverError& e) {
+        CHECK(e.code() == "not_converged");
+        const std::string m = e.what();
+        MESSAGE(m);
+        CHECK(m.find("static solve stalled at load factor") != std::string::npos);
+        CHECK(m.find("largest at node ") != std::string::npos);
+    }
+}
+
 TEST_CASE("Newton that cannot converge stops with not_converged, naming step, time and residual") {
     Value s = beam(10, "clamped", "", "corotational");
     set(s, "newton.max_iterations", Value(1));
