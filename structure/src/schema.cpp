@@ -153,6 +153,15 @@ void check_structure(const Value& s, const std::string& path, Errors& errors) {
         errors.add(&s, "key '" + path + ".members': " + std::to_string(elements) + " elements in all; allowed: at most " +
                            std::to_string(kMaxElements) + " (beyond, double precision cannot resolve the lowest modes)");
 
+    // An element no longer than the node tolerance has both ends at one node: the model builder then refused it
+    // from the participant, naming no scene line and "elements of length 0.000000 m" (a review, 2026-11-28).
+    for (std::size_t i = 0; i < members.size(); ++i)
+        if (const double element = members[i].length() / static_cast<double>(members[i].n); !(element > tol))
+            errors.add(member_value(i), "key '" + path + ".members[" + std::to_string(i) + "]': " +
+                                            std::to_string(members[i].n) + " elements of " + schema::number_text(element) +
+                                            " m; allowed: elements longer than " + schema::number_text(tol) +
+                                            " m (1e-6 of the longest member, within which points are one node)");
+
     // Members connect only at nodes; an end that lands between two nodes of another member would be
     // silently disconnected, which is never what the engineer meant.
     for (std::size_t i = 0; i < members.size(); ++i) {
@@ -294,7 +303,7 @@ TableSchema build() {
 
     auto& mem = s.table_array("members", "Straight members from start to end, meshed with n_elements equal "
                                          "elements. A member end that meets a node of another member is rigidly joined to it.");
-    mem.string("name", "label used in messages");
+    mem.string("name", "a label for the reader of the scene (messages name members by their index, members[i])");
     mem.vector("start", 2, "first end point").unit("m").at_least(-kFar).at_most(kFar).required();
     mem.vector("end", 2, "second end point").unit("m").at_least(-kFar).at_most(kFar).required();
     mem.integer("n_elements", "number of equal beam elements (4000 at most over all members)").at_least(1).at_most(4000)

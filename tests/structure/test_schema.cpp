@@ -109,6 +109,16 @@ TEST_CASE("a support or load where two members cross without a joint is refused,
     CHECK(problem(s) == "");
 }
 
+TEST_CASE("a member whose elements are no longer than the node tolerance is refused, naming it") {
+    // 5e-7 m beside a 1 m member: both ends one node (tolerance 1e-6 m); the participant had refused it with no
+    // scene line, as "elements of length 0.000000 m" (a review, 2026-11-28).
+    Value s = beam(10);
+    s.as_table_mut()["members"].as_array_mut().push_back(
+        table({{"start", vec(L, 0)}, {"end", vec(L, 5e-7)}, {"n_elements", Value(1)}}));
+    const std::string why = problem(s);
+    CHECK(mentions(why, "structure.members[1]': 1 elements of 5e-07 m; allowed: elements longer than 1e-06 m"));
+}
+
 TEST_CASE("cross-key rules: members, distributed loads, damping, initial state, load times") {
     Value s = beam(10);
     set(s, "members", Value(Value::Array{table({{"start", vec(0, 0)}, {"end", vec(0, 0)}})}));
