@@ -407,6 +407,11 @@ void Runner::initialise(std::optional<Checkpoint>& resume) {
             if (!ready.interface && coupled_)
                 throw ParticipantFailure(role, "bad_config", "publishes no interface mesh (no wetted member) in a coupled scene");
             InterfaceMesh mesh = ready.interface ? *ready.interface : InterfaceMesh{F64Array({0, 2}, {}), I32Array({0, 4}, {})};
+            // The scene's [load] is spread over the interface's vertices: with none it acted on nothing, and the
+            // run completed as if it had (a foreign structure that published no mesh; a review, 2026-11-28).
+            if (mesh.vertices.rows() == 0 && scene_.tree.find("load"))
+                throw ParticipantFailure(role, "bad_config", "publishes no interface vertices, and the scene's [load] is "
+                                                             "spread over them: it would act on nothing");
             iface_.reset(mesh);
             recorder_->set_interface(mesh);
             if (!ready.interface_state.empty()) {  // protocol 2: a deformed or moving start (else at rest, undeformed)

@@ -206,6 +206,13 @@ def test_frames_that_cannot_be_recorded_are_named():
     run_fault("ready_dt_zero", "error: structure READY wants a step of 0", 5)
 
 
+def test_a_load_on_a_structure_without_interface_vertices_is_refused():
+    """[load] is spread over the interface's vertices; a structure that publishes none got a [0, 2] force and the
+    run completed as if loaded (a review, 2026-11-28)."""
+    run_fault("no_mesh", "error: structure publishes no interface vertices, and the scene's [load] is spread over "
+                         "them", 5, extra=("--set", "load.force=[1.0, 0.0]"))
+
+
 def test_a_step_that_collapsed_stops_the_run():
     """A structure alone under a sine load steps once per window at the step it wants; one that wanted 1e-19 s
     was given 1e-19 s windows, 7000 a second, for ever (a review, 2026-11-28)."""

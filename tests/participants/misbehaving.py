@@ -29,6 +29,7 @@ section picks the fault:
   mode = "info_not_utf8"  sends READY info {"s": <the 4 bytes ff fe 1b 58, not UTF-8>}
   mode = "info_nul"       sends READY info {"s": "a\\0b"} (a NUL inside)
   mode = "software_nul"   says HELLO software "mis\\0behaving" (from the env, like "version")
+  mode = "no_mesh"        answers READY with interface nil (no wetted surface)
   mode = "exit_after_reply"  answers the first ADVANCE, then closes its socket and exits with status 9 at once
   mode = "ready_dt_zero"  sends READY with dt_wanted 0
   mode = "stats_text"     reports ADVANCED stats with a string value
@@ -134,7 +135,8 @@ def main():
             info = {"info_bad_key": {"": 1}, "info_huge": {f"k{i}": i for i in range(200000)},
                     "info_twice": {"a.b": 1, "a": {"b": "x"}}, "info_software": {"software": "forged"},
                     "info_array": {"arr": [1, 2, 3]}, "info_not_utf8": {"s": "QQQQ"}, "info_nul": {"s": "a\0b"}}.get(mode, {})
-            send("READY", seq, {"dt_wanted": 0.0 if mode == "ready_dt_zero" else 0.01, "interface": mesh, "info": info})
+            send("READY", seq, {"dt_wanted": 0.0 if mode == "ready_dt_zero" else 0.01,
+                                "interface": None if mode == "no_mesh" else mesh, "info": info})
             if mode == "early":
                 zero = f8(4, [0.0] * 8)
                 send("ADVANCED", seq + 2, {"t": 1.0, "dt_wanted": 0.01, "outputs": {"displacement": zero, "velocity": zero},
