@@ -105,9 +105,12 @@ AdvanceReply StructureSolver::advance(const AdvanceRequest& request, Progress& p
     if (request.substeps > 0) {
         runs.push_back({t_end, request.dt / request.substeps, request.substeps});
     } else {
+        // A switch within round-off of the window's ends is taken at that end: a sliver of a run there would be
+        // a step of 1e-17 s.
+        const double sliver = 1e-9 * std::max(std::abs(t_end), request.dt);
         std::vector<double> ends;
         for (double ts : d.load_switch_times())
-            if (ts > t0 && ts < t_end) ends.push_back(ts);
+            if (ts > t0 + sliver && ts < t_end - sliver) ends.push_back(ts);
         ends.push_back(t_end);
         double from = t0;
         for (double to : ends) {
