@@ -101,6 +101,10 @@ AdvanceReply StructureSolver::advance(const AdvanceRequest& request, Progress& p
         std::uint32_t count;
     };
     std::vector<Run> runs;
+    const auto too_many = [&] {
+        return SolverError("bad_message", "structure: a window of " + seconds(request.dt) + " needs more sub-steps of " +
+                                              seconds(dt_wanted_) + " than a count can hold (time.dt_max is too small)");
+    };
     const double t_end = request.t + request.dt;
     if (request.substeps > 0) {
         runs.push_back({t_end, request.dt / request.substeps, request.substeps});
@@ -115,9 +119,7 @@ AdvanceReply StructureSolver::advance(const AdvanceRequest& request, Progress& p
         double from = t0;
         for (double to : ends) {
             const auto count = substeps_to_cover(to - from, dt_wanted_);
-            if (!count)
-                throw SolverError("bad_message", "structure: a window of " + seconds(request.dt) + " needs more sub-steps of " +
-                                                    seconds(dt_wanted_) + " than a count can hold (time.dt_max is too small)");
+            if (!count) throw too_many();
             runs.push_back({to, (to - from) / *count, *count});
             from = to;
         }
@@ -130,9 +132,7 @@ AdvanceReply StructureSolver::advance(const AdvanceRequest& request, Progress& p
         if (!std::isfinite(4.0 / (r.h * r.h)))  // 1/beta <= 4 for every integrator here (Newmark and generalized-alpha)
             throw SolverError("bad_message", "structure: a sub-step of " + seconds(r.h) + " is too short to integrate (1/h^2 overflows)");
     }
-    if (n > UINT32_MAX)
-        throw SolverError("bad_message", "structure: a window of " + seconds(request.dt) + " needs more sub-steps of " +
-                                            seconds(dt_wanted_) + " than a count can hold (time.dt_max is too small)");
+    if (n > UINT32_MAX) throw too_many();
 
     const F64Array* force = nullptr;
     if (auto it = request.inputs.find("force"); it != request.inputs.end()) {
