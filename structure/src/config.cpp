@@ -1,5 +1,6 @@
 #include "sphfsi/structure/config.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -53,6 +54,29 @@ double History::factor(double t, Side side) const {
         case Kind::Sine: return std::sin(2.0 * std::numbers::pi * frequency * s + phase);
     }
     return 0.0;
+}
+
+double History::mean_factor(double t0, double t1) const {
+    const double a = std::max(t0, start_time) - start_time;
+    const double b = std::min(t1, end_time.value_or(t1)) - start_time;
+    if (!(b > a)) return 0.0;
+    double integral = 0.0;
+    switch (kind) {
+        case Kind::Constant: integral = b - a; break;
+        case Kind::Ramp: {
+            // The ramp's antiderivative: s^2 / (2 T) up to T, then T / 2 + (s - T).
+            const double T = ramp_time;
+            const auto F = [T](double s) { return s < T ? s * s / (2.0 * T) : 0.5 * T + (s - T); };
+            integral = F(b) - F(a);
+            break;
+        }
+        case Kind::Sine: {
+            const double w = 2.0 * std::numbers::pi * frequency;
+            integral = (std::cos(w * a + phase) - std::cos(w * b + phase)) / w;
+            break;
+        }
+    }
+    return integral / (t1 - t0);
 }
 
 StructureConfig StructureConfig::from_value(const Value& section) {

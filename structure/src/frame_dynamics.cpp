@@ -1,5 +1,6 @@
 #include "sphfsi/structure/frame_dynamics.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -291,8 +292,14 @@ StepReport FrameDynamics::step(double h, const Vector& extra, std::optional<doub
 
     // Loads at both ends of the step, on the configuration at its start, each as seen from inside the step: a
     // load switched on or off at an end counts as it is within the step (steps that land on a switch then
-    // apply a pulse's impulse exactly; StructureSolver::advance lands its adaptive steps on them).
-    Vector fe0 = scene_load(state_.t, History::Side::Right), fe1 = scene_load(t1, History::Side::Left);
+    // apply a pulse's impulse exactly; StructureSolver::advance lands its adaptive steps on them). A step
+    // that a switch falls inside (sub-steps counted by the coupling, which cannot land there) takes the
+    // loads' mean over the step at both ends instead, so it carries their impulse: sampled at its ends, a
+    // pulse inside it was lost and one that started inside it was applied as a ramp over the whole step.
+    const auto next_switch = std::upper_bound(load_switches_.begin(), load_switches_.end(), state_.t);
+    const bool switch_inside = next_switch != load_switches_.end() && *next_switch < t1;
+    Vector fe0 = switch_inside ? loads_.mean(state_.t, t1, state_.u, !linear()) : scene_load(state_.t, History::Side::Right);
+    Vector fe1 = switch_inside ? fe0 : scene_load(t1, History::Side::Left);
     if (extra.size()) {
         fe0 += extra;
         fe1 += extra;

@@ -54,11 +54,12 @@ std::vector<double> SceneLoads::switch_times() const {
     return times;
 }
 
-Vector SceneLoads::at(double t, const Vector& u, bool follow_rotation, History::Side side) const {
+template <class Factor>
+Vector SceneLoads::assemble(const Factor& factor, const Vector& u, bool follow_rotation) const {
     const Model& model = *model_;
     Vector f = Vector::Zero(model.dof_count());
     for (const auto& p : point_) {
-        const double s = p.history.factor(t, side);
+        const double s = factor(p.history);
         if (s == 0.0) continue;
         f.segment<2>(3 * p.node) += s * p.force;
         f[3 * p.node + 2] += s * p.moment;
@@ -66,7 +67,7 @@ Vector SceneLoads::at(double t, const Vector& u, bool follow_rotation, History::
     if (distributed_.empty()) return f;
     const auto angles = element_angles(model, follow_rotation ? u : Vector());
     for (const auto& d : distributed_) {
-        const double s = d.history.factor(t, side);
+        const double s = factor(d.history);
         if (s == 0.0) continue;
         for (int ei : model.member_elements[d.member]) {
             const Element& e = model.elements[ei];
@@ -76,6 +77,14 @@ Vector SceneLoads::at(double t, const Vector& u, bool follow_rotation, History::
         }
     }
     return f;
+}
+
+Vector SceneLoads::at(double t, const Vector& u, bool follow_rotation, History::Side side) const {
+    return assemble([&](const History& h) { return h.factor(t, side); }, u, follow_rotation);
+}
+
+Vector SceneLoads::mean(double t0, double t1, const Vector& u, bool follow_rotation) const {
+    return assemble([&](const History& h) { return h.mean_factor(t0, t1); }, u, follow_rotation);
 }
 
 Vector point_load_vector(const Model& model, const std::vector<PointLoadSpec>& loads, const char* what) {

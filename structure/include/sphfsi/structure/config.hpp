@@ -26,6 +26,8 @@ struct History {
     // the value from its left (`Side::Left`), a step that starts there the value from its right.
     enum class Side { Left, Right };
     double factor(double t, Side side = Side::Right) const;
+    // The factor's exact mean over [t0, t1] (t1 > t0): its integral, switches included, over the length.
+    double mean_factor(double t0, double t1) const;
 };
 
 struct Material {

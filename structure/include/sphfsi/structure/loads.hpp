@@ -16,12 +16,18 @@ public:
     // start of the step) when `follow_rotation`, else the reference orientation.
     // `side`: at a switch time (History), the value a step ending there sees (Left) or one starting there.
     Vector at(double t, const Vector& u, bool follow_rotation, History::Side side = History::Side::Right) const;
+    // The loads' mean over [t0, t1] (History::mean_factor), for a step that a switch falls inside.
+    Vector mean(double t0, double t1, const Vector& u, bool follow_rotation) const;
     // Every time a load switches on or off, sorted: adaptive stepping lands on them (StructureSolver::advance).
     std::vector<double> switch_times() const;
 
     bool empty() const { return point_.empty() && distributed_.empty(); }
 
 private:
+    // The nodal loads, each load's spec scaled by factor(its history).
+    template <class Factor>
+    Vector assemble(const Factor& factor, const Vector& u, bool follow_rotation) const;
+
     struct NodalLoad {
         int node;
         Vec2 force;
