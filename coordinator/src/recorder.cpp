@@ -24,6 +24,12 @@ bool plain_name(const std::string& name) {
 
 namespace {
 
+// Rows of a per-window column's chunk: 512 float64 = 4 kB. Uncompressed chunks are allocated whole, so a
+// short run's ~30 columns at 4096 rows a chunk took 1 MB for a few dozen rows (0.98 of a 2.1 MB dam-break
+// record at a/10). Rows are still buffered up to kWindowRowsBuffered between frames.
+constexpr hsize_t kWindowChunkRows = 512;
+constexpr std::size_t kWindowRowsBuffered = 4096;
+
 std::string quoted(const std::string& name) { return "'" + protocol::printable(name, 64) + "'"; }
 
 // The record's strings are HDF5 variable-length UTF-8, which end at a NUL: text that is not UTF-8 made every
@@ -194,7 +200,7 @@ void Recorder::copy_history(const std::filesystem::path& old_file, double until)
     };
     hsize_t windows = rows_in_all("/windows", rows_until("/windows/t"), {});
     if (h5::exists(src.get(), "/interface")) windows = rows_in_all("/interface", windows, {"vertices", "cells"});
-    for (const auto& name : h5::children(src.get(), "/windows")) copy_rows("/windows/" + name, windows, 4096);
+    for (const auto& name : h5::children(src.get(), "/windows")) copy_rows("/windows/" + name, windows, kWindowChunkRows);
     // The columns stay those the interrupted run chose at its first window (append_window): chosen again from
     // the first window after the resume, a name that had appeared late would start a column of its own,
     // rows short, and the next resume would cut every column to it.
@@ -304,7 +310,7 @@ std::vector<std::string> Recorder::append_window(const std::vector<std::pair<std
         ++interface_rows_buffered_;
     }
     // Bound memory between frames: write out long stretches without a frame.
-    if (window_buffer_[0].size() >= 4096) flush();
+    if (window_buffer_[0].size() >= kWindowRowsBuffered) flush();
     return unrecorded;
 }
 
@@ -380,7 +386,7 @@ void Recorder::flush() {
     if (!h5_) return;  // an abandoned resume's copy, removed
     if (!window_columns_.empty() && !window_buffer_[0].empty()) {
         for (std::size_t i = 0; i < window_columns_.size(); ++i) {
-            series("/windows/" + window_columns_[i], {}, false, 4096).append(window_buffer_[i].data(), window_buffer_[i].size());
+            series("/windows/" + window_columns_[i], {}, false, kWindowChunkRows).append(window_buffer_[i].data(), window_buffer_[i].size());
             window_buffer_[i].clear();
         }
     }
