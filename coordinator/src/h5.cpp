@@ -219,6 +219,10 @@ void set_attribute(hid_t object, const std::string& name, double value) {
     write_attribute(object, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &value);
 }
 
+void set_attribute(hid_t object, const std::string& name, std::int64_t value) {
+    write_attribute(object, name, H5T_STD_I64LE, H5T_NATIVE_INT64, &value);
+}
+
 void create_groups(hid_t parent, const std::string& path) {
     Handle gcpl(H5Pcreate(H5P_GROUP_CREATE), H5Pclose, "create group creation properties");
     check(H5Pset_local_heap_size_hint(gcpl.get(), kNameHeapBytes), "size a group's name heap", 0);

@@ -69,9 +69,12 @@ void write_value_attributes(hid_t object, const std::string& prefix, const Value
     if (!v.is_table()) return;
     for (const auto& [k, x] : v.as_table()) {
         std::string name = prefix.empty() ? k : prefix + "." + k;
-        if (x.is_number()) h5::set_attribute(object, name, x.as_double());
+        // Numbers keep the type they were sent with: an integer (a particle count) is read back as one, and
+        // one beyond 2^53 keeps every digit. A boolean is an integer 0 or 1 (HDF5 has no boolean type).
+        if (x.is_int()) h5::set_attribute(object, name, x.as_int());
+        else if (x.is_number()) h5::set_attribute(object, name, x.as_double());
         else if (x.is_string()) h5::set_attribute(object, name, x.as_string());
-        else if (x.is_bool()) h5::set_attribute(object, name, x.as_bool() ? 1.0 : 0.0);
+        else if (x.is_bool()) h5::set_attribute(object, name, std::int64_t{x.as_bool() ? 1 : 0});
         else if (x.is_table()) write_value_attributes(object, name, x);
     }
 }
@@ -100,7 +103,7 @@ Recorder::Recorder(std::filesystem::path file, const RunMetadata& meta, std::opt
         h5::set_attribute(h5_.get(), "overrides", meta.overrides);
         h5::set_attribute(h5_.get(), "software_version", meta.software_version);
         h5::set_attribute(h5_.get(), "git_revision", meta.git_revision);
-        h5::set_attribute(h5_.get(), "protocol_version", static_cast<double>(meta.protocol_version));
+        h5::set_attribute(h5_.get(), "protocol_version", static_cast<std::int64_t>(meta.protocol_version));
         set_status("running");
         flush();
         std::filesystem::rename(creating, file_);  // the open handle follows the file: it is the same inode

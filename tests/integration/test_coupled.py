@@ -123,6 +123,11 @@ def test_swap_python_and_builtin_structure_in_the_same_scene():
         assert "rigid_plate.py" in f["participants/structure"].attrs["software"]
     with harness.record(os.path.join(out_cpp, "record.h5")) as f:
         assert "sphfsi-structure" in f["participants/structure"].attrs["software"]
+        # READY info keeps its numbers' types: counts are integers (they were float64 before 2026-11-29).
+        fluid, structure = f["participants/fluid"].attrs, f["participants/structure"].attrs
+        assert fluid["particles"].dtype.kind == "i" and structure["elements"].dtype.kind == "i", \
+            (fluid["particles"].dtype, structure["elements"].dtype)
+        assert fluid["dp"].dtype.kind == "f" and f.attrs["protocol_version"].dtype.kind == "i"
     # Both carry the water's weight. Tolerance 10 %: the coarse SPH column (20 particles deep) still
     # oscillates acoustically after 0.3 s, and the wall pressure of SPH at this spacing is good to a few %.
     y_py = settled(out_py, "mid")

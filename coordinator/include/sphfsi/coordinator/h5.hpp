@@ -61,6 +61,7 @@ void flush(hid_t file);  // throws if HDF5 cannot write everything held (a full 
 void write_string(hid_t parent, const std::string& name, const std::string& text);  // scalar UTF-8 dataset
 void set_attribute(hid_t object, const std::string& name, const std::string& value);
 void set_attribute(hid_t object, const std::string& name, double value);
+void set_attribute(hid_t object, const std::string& name, std::int64_t value);
 // A variable-length string attribute as set_attribute writes it; empty when absent or of another type.
 std::string string_attribute(hid_t object, const std::string& name);
 // The group `path` and the groups above it that are missing, each with room for a run's link names.
