@@ -25,7 +25,7 @@ bool plain_name(const std::string& name) {
 namespace {
 
 // Rows of a per-window column's chunk: 512 float64 = 4 kB. Uncompressed chunks are allocated whole, so a
-// short run's ~30 columns at 4096 rows a chunk took 1 MB for a few dozen rows (0.98 of a 2.1 MB dam-break
+// short run's ~30 columns at 4096 rows a chunk took 1 MB for a few dozen rows (1.0 of a 2.2 MB dam-break
 // record at a/10). Rows are still buffered up to kWindowRowsBuffered between frames.
 constexpr hsize_t kWindowChunkRows = 512;
 constexpr std::size_t kWindowRowsBuffered = 4096;
