@@ -71,8 +71,9 @@ double History::mean_factor(double t0, double t1) const {
             break;
         }
         case Kind::Sine: {
+            // cos(w a + phase) - cos(w b + phase), as a product: no cancellation when w (b - a) is small.
             const double w = 2.0 * std::numbers::pi * frequency;
-            integral = (std::cos(w * a + phase) - std::cos(w * b + phase)) / w;
+            integral = 2.0 * std::sin(0.5 * w * (a + b) + phase) * std::sin(0.5 * w * (b - a)) / w;
             break;
         }
     }

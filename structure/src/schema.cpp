@@ -47,8 +47,8 @@ void add_history_keys(TableSchema& t) {
     t.number("start_time", "the load is zero before this time").unit("s").fallback(0.0);
     t.number("end_time", "the load is zero from this time on; absent = never switched off. Steps the structure "
                          "chooses (alone, between outputs) end on start_time and end_time, so a pulse shorter "
-                         "than a step is applied whole; a sub-step the coupling counts, which a switch falls inside, takes the "
-                         "load's mean over that sub-step, so its impulse, spread over the sub-step")
+                         "than a step is applied whole; a sub-step the coupling counts that a switch falls inside takes the "
+                         "load's mean over that sub-step, which carries the load's impulse spread over the sub-step")
         .unit("s");
 }
 

@@ -87,6 +87,8 @@ public:
 
     // Acceleration that satisfies the equation of motion for the current u, v at the current time.
     void equilibrate_acceleration(const Vector& extra);
+    // The same under the nodal load `load` (scene loads and extra together).
+    void balance_acceleration(const Vector& load);
 
     Energies energies() const;
 
