@@ -87,12 +87,12 @@ public:
 
     // Acceleration that satisfies the equation of motion for the current u, v at the current time.
     void equilibrate_acceleration(const Vector& extra);
-    // The same under the nodal load `load` (scene loads and extra together).
-    void balance_acceleration(const Vector& load);
 
     Energies energies() const;
 
 private:
+    // The same under the nodal load `load` (scene loads and extra together).
+    void balance_acceleration(const Vector& load);
     bool linear() const { return config_.formulation == Formulation::Linear; }
     // Stiffness-proportional damping of co-rotational elements turns with them.
     bool turning_damping() const { return !linear() && rayleigh_beta_ > 0.0; }
