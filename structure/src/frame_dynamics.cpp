@@ -21,6 +21,18 @@ std::string num(double x) {
     s << x;
     return s.str();
 }
+
+// The components of a node's three dofs, in a full-dof vector's order.
+constexpr const char* kComponent[3] = {"ux", "uy", "theta"};
+
+// "at node N (uy)": where the largest entry of a full-dof vector is; a Newton that does not converge names
+// where it fails, as every other failure names its node (a kill probe, 2026-11-28).
+std::string largest_entry(const Vector& x) {
+    Eigen::Index at = 0;
+    if (x.size() == 0) return "nowhere";
+    x.cwiseAbs().maxCoeff(&at);
+    return "at node " + std::to_string(at / 3) + " (" + kComponent[at % 3] + ")";
+}
 }  // namespace
 
 FrameDynamics::FrameDynamics(StructureConfig config, double t0, bool fresh)
@@ -198,23 +210,12 @@ void FrameDynamics::balance_acceleration(const Vector& load) {
 
 // Failures inside step() name the step being taken and the time it ends at, as its not_converged does.
 void FrameDynamics::check_finite(const Vector& x, const char* quantity, double t) const {
-    static const char* component[3] = {"ux", "uy", "theta"};
     for (Eigen::Index i = 0; i < x.size(); ++i)
         if (!std::isfinite(x[i]))
-            throw SolverError("diverged", "structure: " + std::string(quantity) + " " + component[i % 3] +
+            throw SolverError("diverged", "structure: " + std::string(quantity) + " " + kComponent[i % 3] +
                                               " of node " + std::to_string(i / 3) + " is " + num(x[i]) +
                                               " at step " + std::to_string(state_.step + 1) + ", t=" +
                                               num(t) + "; reduce dt_max or check the loads");
-}
-
-// "at node N (uy)": where the largest entry of a full-dof vector is; a Newton that does not converge names
-// where it fails, as every other failure names its node (a kill probe, 2026-11-28).
-std::string FrameDynamics::largest_entry(const Vector& x) const {
-    static const char* component[3] = {"ux", "uy", "theta"};
-    Eigen::Index at = 0;
-    if (x.size() == 0) return "nowhere";
-    x.cwiseAbs().maxCoeff(&at);
-    return "at node " + std::to_string(at / 3) + " (" + component[at % 3] + ")";
 }
 
 void FrameDynamics::check_bounded(const Vector& u, double t) const {

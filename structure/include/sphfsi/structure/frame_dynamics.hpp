@@ -100,7 +100,6 @@ private:
     SparseMatrix reduce(const SparseMatrix& full) const { return model_.T.transpose() * full * model_.T; }
     void check_finite(const Vector& x, const char* quantity, double t) const;
     void check_bounded(const Vector& u, double t) const;
-    std::string largest_entry(const Vector& x) const;
     void check_energy(const Energies& e);
     static bool round_off_floor(int iteration, double norm, double previous, double scale, double tol);
     void setup_damping();
