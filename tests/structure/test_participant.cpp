@@ -131,7 +131,7 @@ TEST_CASE("a load pulse inside a sub-step counted by the coupling carries its im
     for (const char* integrator : {"backward_euler", "newmark", "generalized_alpha"}) {
         const double whole = peak_after_pulses({{0.1, 0.1005, impulse / sub_step}}, 2, integrator);
         CHECK(whole > 1e-4);
-        for (const auto [from, to] : {std::pair{0.10005, 0.1001}, {0.1, 0.10005}, {0.1002, 0.10025}, {0.10045, 0.1005}}) {
+        for (const auto& [from, to] : {std::pair{0.10005, 0.1001}, {0.1, 0.10005}, {0.1002, 0.10025}, {0.10045, 0.1005}}) {
             const double counted = peak_after_pulses({{from, to, impulse / (to - from)}}, 2, integrator);
             MESSAGE(std::string(integrator) << ": tip peak after 0.5 N s over " << from << " - " << to << " s: " << counted
                                << " m, the sub-step's mean " << whole << " m");
