@@ -282,16 +282,23 @@ bool FrameDynamics::round_off_floor(int k, double norm, double previous, double 
 StepReport FrameDynamics::step(double h, const Vector& extra, std::optional<double> t_after) {
     if (!(h > 0) || !std::isfinite(h)) throw SolverError("internal", "structure: step size " + num(h));
     const double t1 = t_after.value_or(state_.t + h);
-    // A step that a scene load's switch falls inside (sub-steps counted by the coupling, which cannot land
-    // there) takes the loads' mean over the step, constant through it: sampled at its ends, a pulse inside
-    // it was lost and one that started inside it was applied as a ramp over the whole step.
+    // Loads at both ends of the step, on the configuration at its start, each as seen from inside the step: a
+    // load switched on or off at an end counts as it is within the step (steps that land on a switch then
+    // apply a pulse's impulse exactly; StructureSolver::advance lands its adaptive steps on them). A step
+    // that a switch falls inside (sub-steps counted by the coupling, which cannot land there) takes the
+    // loads' mean over the step at both ends, constant through it: sampled at its ends, a pulse inside it was
+    // lost and one that started inside it was applied as a ramp over the whole step.
     const auto next_switch = std::upper_bound(load_switches_.begin(), load_switches_.end(), state_.t);
     const bool switch_inside = next_switch != load_switches_.end() && *next_switch < t1;
-    Vector mean_load;
-    if (switch_inside) {
-        mean_load = loads_.mean(state_.t, t1, state_.u, !linear());
-        if (extra.size()) mean_load += extra;
+    const bool starts_at_switch =
+        state_.step > 0 && std::binary_search(load_switches_.begin(), load_switches_.end(), state_.t);
+    Vector fe0 = switch_inside ? loads_.mean(state_.t, t1, state_.u, !linear()) : scene_load(state_.t, History::Side::Right);
+    Vector fe1 = switch_inside ? fe0 : scene_load(t1, History::Side::Left);
+    if (extra.size()) {
+        fe0 += extra;
+        fe1 += extra;
     }
+    check_finite(fe1, "load", t1);
     // A step that starts where a scene load switches on or off (adaptive steps land there) starts from the
     // acceleration of the load after the switch: the one the step before ended with belongs to the load
     // before it, and the integrators' a_n would carry the jump into this step as a spurious force (a 1 ms
@@ -300,27 +307,13 @@ StepReport FrameDynamics::step(double h, const Vector& extra, std::optional<doub
     // the load at its end, so that every integrator applies h times the mean, the loads' impulse, whatever
     // a_n weighs in it (Newmark and generalized-alpha; a review, 2026-11-29: without the brackets, Newmark
     // took six times a pulse that began where the step did, and half of one that ended where it did).
-    if (switch_inside)
-        balance_acceleration(mean_load);
-    else if (std::binary_search(load_switches_.begin(), load_switches_.end(), state_.t) && state_.step > 0)
-        equilibrate_acceleration(extra);
+    if (switch_inside || starts_at_switch) balance_acceleration(fe0);
     const StepCoefficients c = step_coefficients(config_.time.integrator, config_.time.rho_inf, h);
     const double am = c.alpha_m, af = c.alpha_f;
     const Vector& un = state_.u;
     const Vector& vn = state_.v;
     const Vector& an = state_.a;
 
-    // Loads at both ends of the step, on the configuration at its start, each as seen from inside the step: a
-    // load switched on or off at an end counts as it is within the step (steps that land on a switch then
-    // apply a pulse's impulse exactly; StructureSolver::advance lands its adaptive steps on them); a mean
-    // step has its mean at both.
-    Vector fe0 = switch_inside ? mean_load : scene_load(state_.t, History::Side::Right);
-    Vector fe1 = switch_inside ? mean_load : scene_load(t1, History::Side::Left);
-    if (extra.size() && !switch_inside) {
-        fe0 += extra;
-        fe1 += extra;
-    }
-    check_finite(fe1, "load", t1);
     // The part of the weighted balance that belongs to time n (zero for backward Euler / Newmark).
     Vector rest = Vector::Zero(un.size());
     if (am != 0.0) rest += am * (M_ * an);
