@@ -7,8 +7,9 @@
 //   form, on a filled prototype neighbourhood of the dp lattice, where the first sum vanishes),
 // until the largest predicted density error is below eta * rho0 after at least `min_iterations` corrections.
 // The pressure force is a_i = -sum_j m (p_i + p_j) / rho0^2 grad W_ij at the positions of time t (the form
-// the stiffness delta is derived for). Neighbour lists are those of time t: predicted positions move a
-// small fraction of h per step, so pairs entering the support during the step are at its very edge.
+// the stiffness delta is derived for), summed over a list of its pairs built once per step (gradient_pairs.hpp).
+// Neighbour lists are those of time t: predicted positions move a small fraction of h per step, so pairs
+// entering the support during the step are at its very edge.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -17,6 +18,7 @@
 #include <omp.h>
 
 #include "sphfsi/fluid/cell_grid.hpp"
+#include "sphfsi/fluid/gradient_pairs.hpp"
 #include "sphfsi/fluid/lattice.hpp"
 #include "sphfsi/fluid/particles.hpp"
 
@@ -36,8 +38,11 @@ template <int Dim>
 struct PcisphScratch {
     std::vector<Vec<Dim>> x_pred, a_p;
     std::vector<double> rho_pred;
+    GradientPairs<Dim> pairs;  // the pressure force's pairs at the positions of time t
     void resize(std::size_t n) { x_pred.resize(n); a_p.resize(n); rho_pred.resize(n); }
-    std::size_t memory_bytes() const { return x_pred.capacity() * sizeof(Vec<Dim>) * 2 + rho_pred.capacity() * sizeof(double); }
+    std::size_t memory_bytes() const {
+        return x_pred.capacity() * sizeof(Vec<Dim>) * 2 + rho_pred.capacity() * sizeof(double) + pairs.memory_bytes();
+    }
 };
 
 struct PcisphOutcome {
@@ -79,6 +84,9 @@ PcisphOutcome pcisph_solve(ParticleStore<Dim>& P, const CellGrid<Dim>& grid, con
         s.a_p[i] = V{};
         P.p[i] = 0.0;
     }
+    // Every correction sums the pressure force over the same pairs at the same positions: list them once.
+    s.pairs.build(grid, P.x, n, kg, [&](std::uint32_t i) { return P.kind[i] != Kind::Wall; },
+                  [&](std::uint32_t i, std::uint32_t j) { return P.kind[i] == Kind::Fluid || P.kind[j] == Kind::Fluid; });
     PcisphOutcome out;
     for (int it = 0;; ++it) {
         // Predict positions of fluid particles (boundaries were set by the caller).
@@ -130,27 +138,23 @@ PcisphOutcome pcisph_solve(ParticleStore<Dim>& P, const CellGrid<Dim>& grid, con
             P.p[i] = p;
         }
         if (!prm.dummy_boundaries) boundary_pressure();
-        // Pressure accelerations at the positions of time t (fluid, and the reaction on solids).
-        grid.for_each_cell_parallel([&](std::uint32_t cell, std::uint32_t begin, std::uint32_t end) {
-            typename CellGrid<Dim>::Range ranges[CellGrid<Dim>::max_ranges];
-            const int nr = grid.ranges(cell, ranges);
-            for (std::uint32_t i = begin; i < end; ++i) {
-                const Kind ki = P.kind[i];
-                if (ki == Kind::Wall) continue;  // (escaped particles are in no cell)
-                const V xi = P.x[i];
-                const double pi = P.p[i];
-                V acc{};
-                for (int r = 0; r < nr; ++r)
-                    for (std::uint32_t j = ranges[r].begin; j < ranges[r].end; ++j) {
-                        if (ki != Kind::Fluid && P.kind[j] != Kind::Fluid) continue;
-                        const V dx = xi - (P.x[j] + ranges[r].shift);
-                        const double r2 = norm2(dx);
-                        if (r2 >= R2 || r2 == 0.0) continue;
-                        acc += dx * (-(pi + P.p[j]) * kg.grad_factor(std::sqrt(r2)));
-                    }
-                s.a_p[i] = acc * (m * inv_rho02);
+        // Pressure accelerations at the positions of time t (fluid, and the reaction on solids), over the pairs
+        // listed before the loop: the same terms in the same order as a scan of the cells.
+        const bool periodic = !s.pairs.shift.empty();
+#pragma omp parallel for schedule(static)
+        for (long long k = 0; k < nn; ++k) {
+            const std::size_t i = static_cast<std::size_t>(k);
+            if (P.kind[i] == Kind::Wall) continue;
+            const V xi = P.x[i];
+            const double pi = P.p[i];
+            V acc{};
+            for (std::size_t q = s.pairs.first[i]; q < s.pairs.first[i + 1]; ++q) {
+                const std::uint32_t j = s.pairs.j[q];
+                const V dx = xi - (periodic ? P.x[j] + s.pairs.shift[q] : P.x[j]);
+                acc += dx * (-(pi + P.p[j]) * s.pairs.grad_factor[q]);
             }
-        });
+            s.a_p[i] = acc * (m * inv_rho02);
+        }
         ++out.iterations;
     }
 }
