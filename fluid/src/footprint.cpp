@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "sphfsi/fluid/kernel_names.hpp"
 #include "sphfsi/fluid/schema.hpp"
@@ -49,7 +50,14 @@ Footprint estimate_footprint(const sphfsi::Value& fluid) {
     const double wall = layers * dp, head = lid ? wall : std::max(H, water_top);
     const double width = W + (walls_x ? 2 * wall : 0), height = H + (floor ? wall + head : 0);
     f.cells = std::ceil(width / support) * std::ceil(height / support);
+    if (fluid.at("pressure").at("model").as_string() == "pcisph")
+        f.bytes_per_particle += pair_list_bytes_per_particle(support / dp, periodic.x || periodic.y);
     return f;
+}
+
+double pair_list_bytes_per_particle(double support_over_dp, bool periodic) {
+    const double pairs = std::numbers::pi * support_over_dp * support_over_dp;
+    return 8.0 + (periodic ? 28.0 : 12.0) * (17.0 / 16.0) * pairs;
 }
 
 double physical_memory_bytes() {

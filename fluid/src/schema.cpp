@@ -242,7 +242,7 @@ void check_footprint(const Value& fluid, const std::string& path, Errors& errors
                                                 : std::string();
     errors.add(&fluid.at("dp"), "key '" + key(path, "dp") + "': " + sci(dp) + " m lays out about " + sci(f.particles) +
                                     " particles (and " + sci(f.cells) + " grid cells), about " + sci(f.bytes() / 1e9) +
-                                    " GB at " + sci(kBytesPerParticle) + " B a particle" + why +
+                                    " GB at " + sci(f.bytes_per_particle) + " B a particle" + why +
                                     "; allowed: dp of about " + sci(dp * std::sqrt(std::max({over_memory, over_count, over_cells})) * 1.01) +
                                     " m or more for this geometry" + tank_too);
 }
@@ -250,7 +250,8 @@ void check_footprint(const Value& fluid, const std::string& path, Errors& errors
 TableSchema build() {
     TableSchema s("The SPH fluid participant (sphfsi-fluid). SI units; 2D, quantities per metre of depth.");
     s.number("dp", "initial particle spacing; sets particle size and mass rho0 * dp^2. A spacing whose particles "
-                   "(about 600 B each, coordinator included) exceed this machine's memory is refused")
+                   "(about 600 B each, coordinator included; PCISPH lists each particle's pairs, about 370 B more at "
+                   "h_over_dp = 1.5) exceed this machine's memory is refused")
         .unit("m").greater_than(0).required();
     s.number("h_over_dp", "smoothing length h in units of dp; the support radius is 2h (3h for \"gaussian\"). 1.5: Wendland gradients on the initial lattice are consistent to 0.3 % and 3 wall layers cover the support")
         .at_least(1.0).at_most(4.0).fallback(1.5);

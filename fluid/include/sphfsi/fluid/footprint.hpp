@@ -10,6 +10,10 @@ namespace sphfsi::fluid {
 // the participant with its FRAME messages peaks at 394 B and the coordinator recording them at 180 - 190 B,
 // 574 - 584 B together (tools/run_memory.py, docs/benchmarks.md "Memory of a whole run").
 constexpr double kBytesPerParticle = 600.0;
+// PCISPH also lists each particle's pairs once a step (gradient_pairs.hpp): 12 B a pair, 28 B on a periodic
+// grid, with 1/16 head room, and an 8-byte start per particle. The estimate counts a full neighbourhood,
+// pi (support / dp)^2 pairs (2D), for every particle: walls have none, so this is an upper bound.
+double pair_list_bytes_per_particle(double support_over_dp, bool periodic);
 // The neighbour grid holds one 4-byte cell start per cell of one support radius.
 constexpr double kBytesPerCell = 4.0;
 // Particle ids are signed 32-bit (ParticleStore::id, the first solid's id).
@@ -19,7 +23,8 @@ struct Footprint {
     double particles = 0;  // fluid, tank walls, obstacles and gate, as the lattice lays them out
     double wall_particles = 0;  // of which the tank's walls
     double cells = 0;      // neighbour-grid cells over the tank, its walls and the head room above an open top
-    double bytes() const { return particles * kBytesPerParticle + cells * kBytesPerCell; }
+    double bytes_per_particle = kBytesPerParticle;  // plus PCISPH's pair list
+    double bytes() const { return particles * bytes_per_particle + cells * kBytesPerCell; }
 };
 
 // From a section with its defaults filled in (with_defaults). Counts in doubles, so absurd spacings do
