@@ -139,12 +139,12 @@ PcisphOutcome pcisph_solve(ParticleStore<Dim>& P, const CellGrid<Dim>& grid, con
         }
         if (!prm.dummy_boundaries) boundary_pressure();
         // Pressure accelerations at the positions of time t (fluid, and the reaction on solids), over the pairs
-        // listed before the loop: the same terms in the same order as a scan of the cells.
+        // listed before the loop: the same terms in the same order as a scan of the cells. Which particles and
+        // pairs take part is the list's rule alone (walls have no pairs, so theirs stay zero).
         const bool periodic = !s.pairs.shift.empty();
 #pragma omp parallel for schedule(static)
         for (long long k = 0; k < nn; ++k) {
             const std::size_t i = static_cast<std::size_t>(k);
-            if (P.kind[i] == Kind::Wall) continue;
             const V xi = P.x[i];
             const double pi = P.p[i];
             V acc{};
