@@ -397,13 +397,16 @@ TableSchema build() {
 
     TableSchema& surface = s.table("free_surface", "free-surface detection and wind stress");
     surface.number("threshold", "a particle is on the free surface when the divergence of position (2 inside the "
-                                "fluid, in 2D) is below this (the participant is 2D; the core scales the threshold by Dim/2 for a 3D one)")
+                                "fluid, in 2D) is below this; within reach of a tank wall it is counted with the wall's particles replaced by the "
+                                "fluid mirrored across its surface, so that a dry wall above the water does not count as water "
+                                "(the participant is 2D; the core scales the threshold by Dim/2 for a 3D one)")
         .greater_than(0).less_than(2).fallback(1.5);
     surface.vector("wind_shear", 2, "shear stress applied to the free surface (wind): each free-surface particle "
                                     "carries it on its share of the surface (dp on the initial lattice; measured "
                                     "along the surface as the layer rearranges, the surface mirrored at the tank's "
                                     "walls where it meets them), so the total force is tau times the surface "
-                                    "length (0.9995 of it on the wind basin's initial lattice)").unit("Pa")
+                                    "length: exactly on the initial lattice, 1 - 2 % less where the surface layer disorders; the "
+                                    "record's window column fluid.wind_surface_length is the surface it acted on").unit("Pa")
         .fallback(Value(Value::Array{Value(0.0), Value(0.0)}));
 
     TableSchema& time = s.table("time", "time stepping");

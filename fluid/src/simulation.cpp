@@ -140,10 +140,10 @@ Simulation2D::Simulation2D(const FluidSettings& settings, Scene2D scene, double 
     rates_.repulsive_r0 = s_.dp;
     rates_.repulsive_d = s_.repulsive_d > 0.0 ? s_.repulsive_d : 5.0 * s_.gravity_magnitude() * s_.water_top();
     rates_.gravity = V{{s_.gravity[0], s_.gravity[1]}};
-    std::vector<WallPlane> wall_planes;  // the tank's wall surfaces, where the free surface ends
-    if (geometry_.walls_x) wall_planes.insert(wall_planes.end(), {{0, 0.0}, {0, geometry_.width}});
-    if (geometry_.floor) wall_planes.push_back({1, 0.0});
-    if (geometry_.lid) wall_planes.push_back({1, geometry_.height});
+    std::vector<WallPlane> wall_planes;  // the tank's wall surfaces: where the free surface ends, what its detection mirrors
+    if (geometry_.walls_x) wall_planes.insert(wall_planes.end(), {{0, 0.0, 1}, {0, geometry_.width, -1}});
+    if (geometry_.floor) wall_planes.push_back({1, 0.0, 1});
+    if (geometry_.lid) wall_planes.push_back({1, geometry_.height, -1});
     surface_ = make_surface_stress<Dim>(V{{s_.wind_shear[0], s_.wind_shear[1]}}, surface_threshold(), h_, s_.dp,
                                         std::move(wall_planes));
 

@@ -71,6 +71,9 @@ public:
     double max_speed() const { return st_.u_max; }
     std::uint64_t escaped_count() const { return st_.escaped; }
     std::size_t free_surface_count() const;
+    // The surface the wind's stress acted on at the last full evaluation of the rates, the sum of the surface
+    // particles' shares [m in 2D] (surface_stress.hpp): tau times it is the wind's total force. 0 without wind.
+    double wind_surface() const { return wind_surface_; }
     // The divergence of position below which a fluid particle is on the free surface. The scene states it in
     // 2D terms (2 in the bulk, 2.0 - 2.83 in the top layers of a 3D lattice against 3): scaled by Dim / 2, so
     // that a 3D participant built on this core would not silently flag nothing at the scene's 1.5 (a review).
@@ -210,6 +213,7 @@ private:
     StandardEos standard_;
     RateParams<Dim> rates_;
     SurfaceStress<Dim> surface_;  // wind
+    double wind_surface_ = 0.0;   // what apply_surface_stress returned at the last full evaluation
     bool continuity_ = false;  // densities integrated (else summed)
     // Velocity Verlet's second half of the density update, due in the coming evaluation once the particles
     // are sorted at their new positions and before the pressures are taken from the densities (0: none).
