@@ -17,7 +17,8 @@
 // above it there is no fluid to mirror, so a dry wall no longer looks like water. The surface normal is taken
 // over the same neighbours, which keeps the end particles' normals from leaning away from the wall rising
 // above the water (on the resting lattice between walls the shares then add up to the length exactly, where
-// they had come to 0.9972 of it). Obstacles and coupled structures have no surface plane and keep their particles.
+// they had come to 0.9972 of it). Obstacles and coupled structures have no surface plane and keep their
+// particles.
 //
 // Which piece. On the initial lattice every surface particle represents dp^(Dim-1) of surface, and that is
 // all the first version assumed. A surface under a sustained stress does not stay a lattice: in a closed
@@ -152,9 +153,12 @@ void for_each_mirrored_neighbour(const ParticleStore<Dim>& P, const typename Cel
 }
 
 // Takes div r again, with the tank walls mirrored (above), for every fluid particle within reach of a tank
-// wall (of those with only[i] != 0 when `only` is given); P.div_r then holds what the free-surface flag, the
-// record's and the kernel correction's mask read. Its form is the rate pass's: m sum_j (V_j / m_j) r_ij
-// F(r_ij) r_ij, an image with the volume of the particle it mirrors.
+// wall (of those with only[i] != 0 when `only` is given), after the rate pass has written P.div_r: the wind's
+// and the record's free-surface flags and the kernel correction's mask then read this value. Its form is the
+// rate pass's, m sum_j (V_j / m_j) r_ij F(r_ij) r_ij, an image with the volume of the particle it mirrors.
+// The simulation runs it in scenes with wind only (simulation_rates.cpp says why); in the others the
+// record's flag is the rate pass's, which can miss a particle where the surface meets a tank wall, and a
+// one- or two-particle film along the floor.
 template <int Dim, class KernelG>
 void detect_surface_at_tank_walls(ParticleStore<Dim>& P, const CellGrid<Dim>& grid, const KernelG& kg, double mass,
                                   const SurfaceStress<Dim>& s, const std::uint8_t* only = nullptr) {
