@@ -203,6 +203,7 @@ Field& TableSchema::free_table(std::string n, std::string d) {
 }
 
 Value TableSchema::validate(const Value& input, const std::string& path, Errors& errors) const {
+    const std::size_t errors_before = errors.items.size();
     Value::Table out;
     if (!input.is_table()) {
         errors.add(&input, "key '" + path + "': got " + input.type_name() + "; allowed: a table");
@@ -234,8 +235,10 @@ Value TableSchema::validate(const Value& input, const std::string& path, Errors&
     }
     Value result(std::move(out));
     result.line = input.line;
-    std::size_t before = errors.items.size();
-    if (before == 0)  // cross-key rules only make sense on individually valid keys
+    // Cross-key rules only make sense on individually valid keys: they run when this table's own keys and
+    // tables are valid, whatever was wrong elsewhere, so that one look at a scene names every mistake (they
+    // had waited for the whole scene to be valid until 2026-11-29).
+    if (errors.items.size() == errors_before)
         for (const auto& c : checks_) c(result, path, errors);
     return result;
 }

@@ -230,6 +230,20 @@ def test_rules_that_join_sections_are_checked_before_anything_starts():
         assert code == 2 and expected in text, (sets, expected, text)
 
 
+def test_a_rule_joining_keys_is_checked_beside_another_sections_mistake():
+    """One look names every mistake: a broken rule between the fluid's keys is reported beside a bad key in
+    [run] (until 2026-11-29 any earlier mistake held every later table's rules back, and the second showed
+    only once the first was mended)."""
+    path = os.path.join(harness.ROOT, "scenarios", "dam_break.toml")
+    code, text = harness.sphfsi("check", path, "--set", "run.end_time=-1", "--set", "fluid.pressure.model=pcisph",
+                                "--set", "fluid.density.method=summation", "--set", "fluid.pressure.min_iterations=10",
+                                "--set", "fluid.pressure.max_iterations=5")
+    assert code == 2, text
+    for expected in ["key 'run.end_time': got -1",
+                     "key 'fluid.pressure.min_iterations': 10 is more than pressure.max_iterations (5)"]:
+        assert expected in text, f"missing: {expected}\n---\n{text}"
+
+
 def test_a_coupled_scene_may_leave_coupling_out():
     """Every coupling key has a default; before 2026-11-27 a scene without [coupling] passed check and then
     stopped after both participants had started ("missing key 'coupling'")."""

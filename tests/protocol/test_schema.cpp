@@ -95,6 +95,27 @@ TEST_CASE("cross-key checks run only on individually valid tables") {
     CHECK(e2.items.size() == 1);  // only the missing key, no crash in the check
 }
 
+TEST_CASE("a table's cross-key checks run whatever is wrong in another table") {
+    // A scene with a mistake in one section and a broken cross-key rule in another gets both named at once
+    // (until 2026-11-29 any earlier mistake in the scene held every later table's rules back).
+    TableSchema scene;
+    TableSchema& first = scene.table("first", "");
+    first.number("n", "").at_least(0).required();
+    TableSchema& second = scene.table("second", "");
+    second.number("a", "").required();
+    second.number("b", "").required();
+    second.check([](const Value& t, const std::string& path, Errors& e) {
+        if (t.at("a").as_double() > t.at("b").as_double()) e.add(&t, path + ": a must not exceed b");
+    });
+    Errors e;
+    scene.validate(table({{"first", table({{"n", Value(-1.0)}})},
+                          {"second", table({{"a", Value(2.0)}, {"b", Value(1.0)}})}}),
+                   "", e);
+    REQUIRE(e.items.size() == 2);
+    CHECK(e.items[0].find("key 'first.n'") != std::string::npos);
+    CHECK(e.items[1] == "second: a must not exceed b");
+}
+
 TEST_CASE("the reference documents every key") {
     std::string doc = example().document("fluid");
     for (const char* key : {"`fluid.dp`", "`fluid.layers`", "`fluid.kernel`", "`fluid.gravity`", "`fluid.block[].width`"})
