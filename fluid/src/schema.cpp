@@ -406,7 +406,7 @@ TableSchema build() {
                                     "carries it on its share of the surface (dp on the initial lattice; measured "
                                     "along the surface as the layer rearranges, the surface mirrored at the tank's "
                                     "walls where it meets them), so the total force is tau times the surface "
-                                    "length: exactly on the initial lattice, 1 - 2 % less where the surface layer disorders; the "
+                                    "length: exactly on the initial lattice, up to about 2 % less where the surface layer disorders; the "
                                     "record's window column fluid.wind_surface_length is the surface it acted on").unit("Pa")
         .fallback(Value(Value::Array{Value(0.0), Value(0.0)}));
 

@@ -65,10 +65,10 @@ def test_fluid_alone_starts_only_the_fluid():
         assert x[last == 1].max() > x[last == 0].max()
     out = run_coarse("wind_basin")
     assert roles_in(out) == ["fluid"]
-    # The wind acts on the whole surface (surface_stress.hpp): tau times the recorded surface is its force, and
-    # at 0.05 s the surface is still nearly the lattice's, whose shares add up to the tank's 0.4 m exactly
-    # (measured 1 - 1.5e-4); 0.5 % allows for the first rearrangement, a quarter of one particle's share of
-    # dp = 8 mm, 2 % of the length.
+    # The wind acts on the whole surface (surface_stress.hpp): tau times the recorded surface is its force.
+    # On the initial lattice the shares add up to the tank's 0.4 m exactly; at the window's end, t = 0.05 s,
+    # they were 1 - 1.5e-4 of it. Tolerance 0.5 % = 2 mm, a quarter of one particle's 8 mm share (a whole
+    # share is 2 % of the length).
     with harness.record(os.path.join(out, "record.h5")) as f:
         carried = f["windows/fluid.wind_surface_length"][...]
         assert len(carried) > 0 and all(abs(c / 0.4 - 1) < 0.005 for c in carried), carried.tolist()

@@ -12,13 +12,13 @@
 // to 0.979 - 0.996 of the length in the developed wind basin (dp = 4 and 2 mm; a review, 2026-11-28). So
 // within reach of a tank wall the detection is taken again with that wall as the ghost-fluid method has it
 // (Marrone et al. 2010 detect the surface this way): its particles left out, the mirror images of the fluid
-// across its surface put in. Below the water the images stand where the wall particles stand (a wall's
-// layers start dp/2 behind its surface, as the fluid's rows start dp/2 in front), so nothing changes there;
-// above it there is no fluid to mirror, so a dry wall no longer looks like water. The surface normal is taken
-// over the same neighbours, which keeps the end particles' normals from leaning away from the wall rising
-// above the water (on the resting lattice between walls the shares then add up to the length exactly, where
-// they had come to 0.9972 of it). Obstacles and coupled structures have no surface plane and keep their
-// particles.
+// (and of whatever stands in it) across its surface put in. Below the water the images stand where the wall
+// particles stand (a wall's layers start dp/2 behind its surface, as the fluid's rows start dp/2 in front),
+// so nothing changes there; above it there is no fluid to mirror, so a dry wall no longer looks like water.
+// The surface normal is taken over the same neighbours, which keeps the end particles' normals from leaning
+// away from the wall rising above the water (on the resting lattice between walls the shares then add up to
+// the length exactly, where they had come to 0.9972 of it). Obstacles and coupled structures have no surface
+// plane of their own and keep their particles.
 //
 // Which piece. On the initial lattice every surface particle represents dp^(Dim-1) of surface, and that is
 // all the first version assumed. A surface under a sustained stress does not stay a lattice: in a closed
@@ -47,6 +47,7 @@
 // coupled structures piercing the surface get no images.
 #include <cmath>
 #include <cstdint>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -56,11 +57,16 @@
 namespace sphfsi::fluid {
 
 // A tank wall's surface: the plane where coordinate `axis` is `at`, the water on the side `inward` (+1 or -1)
-// points to.
+// points to. All three are given: a default side would silently put a right wall or a lid the wrong way.
+// The plane is taken as unbounded; a side wall of an open tank ends at the tank's top, and water thrown
+// above it would be mirrored across a wall that is not there (no scene puts wind on such water).
 struct WallPlane {
-    int axis = 0;
-    double at = 0.0;
-    int inward = 1;
+    int axis;
+    double at;
+    int inward;
+    WallPlane(int axis_, double at_, int inward_) : axis(axis_), at(at_), inward(inward_) {
+        if (inward != 1 && inward != -1) throw std::invalid_argument("WallPlane: inward must be +1 or -1");
+    }
     bool behind(double coordinate) const { return (coordinate - at) * inward < 0.0; }
 };
 
@@ -105,9 +111,10 @@ SurfaceStress<Dim> make_surface_stress(const Vec<Dim>& tau, double threshold, do
 }
 
 // Calls visit(dx, r2, j) for each neighbour of fluid particle i within the kernel's reach (dx = x_i - x_j,
-// 0 < r2 < R2), as the detection and the normal see them: a tank wall within reach of x_i is left out and the
-// fluid mirrored across its surface instead (i's own images included; across two walls at a corner, the
-// image of an image). An image is never nearer than what it mirrors (x_i and x_j on the water's side), so
+// 0 < r2 < R2), as the detection and the normal see them: a tank wall within reach of x_i is left out and
+// everything kept mirrored across its surface instead, fluid and whatever stands in it (an obstacle or a
+// structure on the floor has its image below the floor as the water beside it has; i's own images included;
+// across two walls at a corner, the image of an image). An image is never nearer than what it mirrors (x_i and x_j on the water's side), so
 // the cells searched for x_i hold every image within reach. Opposite walls both within reach of one particle
 // (a tank under two supports wide) would need images of images along one axis; those are left out.
 template <int Dim, class Visit>
@@ -135,7 +142,6 @@ void for_each_mirrored_neighbour(const ParticleStore<Dim>& P, const typename Cel
             const V xj = P.x[j] + ranges[r].shift;
             if (P.kind[j] == Kind::Wall && behind_a_near_wall(xj)) continue;
             visit_if_within(xi - xj, j);
-            if (P.kind[j] != Kind::Fluid) continue;
             for (int set = 1; set < (1 << nw); ++set) {  // each non-empty set of near walls, mirrored in turn
                 V image = xj;
                 int axes = 0;
