@@ -398,8 +398,8 @@ TableSchema build() {
     TableSchema& surface = s.table("free_surface", "free-surface detection and wind stress");
     surface.number("threshold", "a particle is on the free surface when the divergence of position (2 inside the "
                                 "fluid, in 2D) is below this; with wind, within reach of a tank wall it is counted with the wall's particles "
-                                "replaced by the fluid mirrored across its surface, so that a dry wall above the water does not "
-                                "count as water "
+                                "replaced by the mirror image of the water (and of whatever stands in it) across its surface, so "
+                                "that a dry wall above the water does not count as water "
                                 "(the participant is 2D; the core scales the threshold by Dim/2 for a 3D one)")
         .greater_than(0).less_than(2).fallback(1.5);
     surface.vector("wind_shear", 2, "shear stress applied to the free surface (wind): each free-surface particle "

@@ -136,13 +136,15 @@ struct WalledLayer {
                     kind.push_back(obstacle && in_obstacle(k) ? Kind::Wall : Kind::Fluid);
         if (obstacle)
             for (int k = 0; k < columns; ++k)
-                for (int r = rows; r < 12 && in_obstacle(k); ++r) x.push_back(Vec2{{(k + 0.5) * dp, (r + 0.5) * dp}}), kind.push_back(Kind::Wall);
+                for (int r = rows; r < 12 && in_obstacle(k); ++r)
+                    x.push_back(Vec2{{(k + 0.5) * dp, (r + 0.5) * dp}}), kind.push_back(Kind::Wall);
         for (int r = -3; r < 12; ++r)
             for (int c = 0; c < 3; ++c)
                 for (const double at : {-(c + 0.5) * dp, L + (c + 0.5) * dp})
                     x.push_back(Vec2{{at, (r + 0.5) * dp}}), kind.push_back(Kind::Wall);
         for (int r = 1; r <= 3; ++r)
-            for (int k = 0; k < columns; ++k) x.push_back(Vec2{{(k + 0.5) * dp, -(r - 0.5) * dp}}), kind.push_back(Kind::Wall);
+            for (int k = 0; k < columns; ++k)
+                x.push_back(Vec2{{(k + 0.5) * dp, -(r - 0.5) * dp}}), kind.push_back(Kind::Wall);
         const WendlandC2Kernel<2> kg(h);
         const double R = kg.support();
         P.resize(x.size());
