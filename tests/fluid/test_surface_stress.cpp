@@ -226,7 +226,6 @@ TEST_SUITE("wind") {
         CHECK(worst_total < 0.01);
     }
 
-
     TEST_CASE("the surface stress adds up to tau times the surface length however the surface is arranged") {
         Layer lattice;
         lattice.row(8.5 * dp, dp, 0.0, true);
