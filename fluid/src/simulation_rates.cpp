@@ -271,10 +271,14 @@ void Simulation2D::refresh_solid_rates() {
         for (std::size_t i = 0; i < n; ++i)
             if (P.kind[i] == Kind::Solid) near_solid_[i] = 1;
         mark_fluid_neighbours([&](std::uint32_t i) { return P.kind[i] == Kind::Solid; }, 1);
-        if (s_.kernel_correction) {
-            // The solids' new densities change the matrices L of their fluid neighbours, and the pair terms
-            // (L_i + L_j)/2 of those neighbours' own neighbours with them: mark that second ring too.
+        // A second ring, the fluid neighbours of the first: with the correction, the solids' new densities
+        // change the matrices L of their fluid neighbours, and the pair terms (L_i + L_j)/2 of those
+        // neighbours' own neighbours with them; with wind, a first-ring particle whose surface flag flips here
+        // changes the shares of the surface particles within reach of it (a review, 2026-11-29: without the
+        // correction the refresh kept theirs, and a window ended apart from a full evaluation's).
+        if (s_.kernel_correction || surface_.on())
             mark_fluid_neighbours([&](std::uint32_t i) { return near_solid_[i] == 1 && P.kind[i] == Kind::Fluid; }, 2);
+        if (s_.kernel_correction) {
             // L is built on the mask of the evaluation before it (P.div_r): the window-end evaluation used the
             // one before that, a full evaluation now would use the window end's. Where the free surface moved,
             // masks flip far from any solid (a review, 2026-11-27), so every particle whose L comes out
@@ -290,9 +294,6 @@ void Simulation2D::refresh_solid_rates() {
         // The factors of all particles: the buffer is scratch (the sort reuses it), not state.
         compute_rates(P, grid_, kw, kg, ViscosityKernel<Dim>(h_), fill_rate_factors(), rates_, nullptr,
                       near_solid_.data());
-        // Not exact with wind in one case (a review, 2026-11-29): a marked particle whose surface flag flips
-        // here changes the shares of its unmarked surface neighbours, which keep theirs. No scene couples a
-        // structure under wind, and the refresh test's wind runs flip none (tests/fluid/test_adapter.cpp).
         if (surface_.on()) {
             detect_surface_at_tank_walls(P, grid_, kg, mass_, surface_, near_solid_.data());
             apply_surface_stress(P, grid_, kg, mass_, surface_, near_solid_.data());
