@@ -250,13 +250,15 @@ def test_an_implicit_iterate_that_overflows_stops_the_run_after_recording_its_wi
     Before 2026-11-28 the first window counted as converged (its residual and its bound both overflowed, and
     inf <= inf) and the run completed with the interface 1e308 m away; and an iterate that was not finite was
     thrown before its window was recorded, naming no vertex. Now the window is recorded, unconverged, and the
-    run stops naming the iterate's entry."""
+    run stops naming the iterate's entry, and the structure's answer it was made from (finite itself: the
+    accelerator overflowed on it)."""
     out = harness.out_dir("overflow")
     code, text = harness.sphfsi("run", os.path.join(harness.SCENES, "misbehaving_coupled.toml"), "--out", out,
                                 "--quiet", timeout=30)
     expect = ("coupling diverged: the implicit-aitken iterate of window t = 0 .. 0.01 s is not finite after 2 "
               "iterations (residual inf m): its displacement x at interface vertex 0 is")
     assert code == 1 and expect in text, (code, text)
+    assert "the structure last answered -1e+308 m for its displacement x at interface vertex 0, its largest entry" in text, text
     with harness.record(os.path.join(out, "record.h5")) as f:
         assert f.attrs["status"].startswith("failed: " + expect), f.attrs["status"]
         assert list(f["windows/iterations"][:]) == [2] and list(f["windows/converged"][:]) == [0]

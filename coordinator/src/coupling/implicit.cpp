@@ -81,7 +81,7 @@ public:
                 // is not finite is the coupling's failure, named here, not the fluid's bad input. The window
                 // ends on the last evaluated iterate, as at the iteration cap, so that it is recorded before the
                 // run stops (it was thrown past the record before 2026-11-28).
-                if (!next.allFinite()) o.stop_run = non_finite_iterate(next, nd, p, k + 1, o.residual);
+                if (!next.allFinite()) o.stop_run = non_finite_iterate(next, xt, nd, p, k + 1, o.residual);
             }
             if (o.converged || k + 1 >= max_iter_ || !o.stop_run.empty()) {
                 s.force = f;
@@ -117,18 +117,26 @@ public:
     }
 
 private:
-    // Names the first entry of a proposed iterate (displacements, then velocities) that is not finite.
-    std::string non_finite_iterate(const Vec& next, Eigen::Index nd, const WindowPlan& p, int iterations,
-                                   double residual) const {
+    // Names the first entry of a proposed iterate (displacements, then velocities) that is not finite, and the
+    // largest entry of the structure's last answer `answer` that it was made from: an answer that overflows
+    // the accelerator is finite itself (1e308 m), and the user needs to see that the structure gave it.
+    std::string non_finite_iterate(const Vec& next, const Vec& answer, Eigen::Index nd, const WindowPlan& p,
+                                   int iterations, double residual) const {
+        const auto entry = [nd](Eigen::Index j) {
+            const bool velocity = j >= nd;
+            const Eigen::Index k = velocity ? j - nd : j;
+            return std::string(velocity ? "velocity " : "displacement ") + (k % 2 == 0 ? 'x' : 'y') +
+                   " at interface vertex " + std::to_string(k / 2);
+        };
         Eigen::Index j = 0;
         while (j < next.size() && std::isfinite(next[j])) ++j;
-        const bool velocity = j >= nd;
-        const Eigen::Index k = velocity ? j - nd : j;
+        Eigen::Index largest = 0;
+        answer.cwiseAbs().maxCoeff(&largest);
         std::ostringstream msg;
         msg << "coupling diverged: the " << scheme_ << " iterate of window t = " << p.t << " .. " << p.t + p.dt
             << " s is not finite after " << iterations << " iterations (residual " << residual << " m): its "
-            << (velocity ? "velocity" : "displacement") << ' ' << (k % 2 == 0 ? 'x' : 'y') << " at interface vertex "
-            << k / 2 << " is " << next[j];
+            << entry(j) << " is " << next[j] << "; the structure last answered " << answer[largest]
+            << (largest >= nd ? " m/s" : " m") << " for its " << entry(largest) << ", its largest entry";
         return msg.str();
     }
 
