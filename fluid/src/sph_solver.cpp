@@ -373,8 +373,7 @@ protocol::AdvanceReply SphSolver::advance(const protocol::AdvanceRequest& reques
     stats["free_surface_particles"] = Value(static_cast<std::int64_t>(sim_->free_surface_count()));
     // The surface the wind acted on (m; tau times it is its force), so that a record shows whether the whole
     // surface felt it: the tank's length when every surface particle is found. Only in scenes with wind.
-    if (settings_.wind_shear[0] != 0.0 || settings_.wind_shear[1] != 0.0)
-        stats["wind_surface_length"] = Value(sim_->wind_surface());
+    if (sim_->has_wind()) stats["wind_surface_length"] = Value(sim_->wind_surface());
     // The most fluid particles more than 0.1 dp beyond a tank wall's surface or inside an obstacle, the gate or
     // the structure after any step of the window (Simulation2D::wall_crossings; 0 in a healthy run): makes a
     // leak visible in every record, also one that came back out before the window ended.

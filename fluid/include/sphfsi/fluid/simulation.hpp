@@ -74,6 +74,7 @@ public:
     // The surface the wind's stress acted on at the last full evaluation of the rates, the sum of the surface
     // particles' shares [m in 2D] (surface_stress.hpp): tau times it is the wind's total force. 0 without wind.
     double wind_surface() const { return wind_surface_; }
+    bool has_wind() const { return surface_.on(); }
     // The divergence of position below which a fluid particle is on the free surface. The scene states it in
     // 2D terms (2 in the bulk, 2.0 - 2.83 in the top layers of a 3D lattice against 3): scaled by Dim / 2, so
     // that a 3D participant built on this core would not silently flag nothing at the scene's 1.5 (a review).

@@ -71,6 +71,9 @@ struct WallPlane {
         if (inward != 1 && inward != -1) throw std::invalid_argument("WallPlane: inward must be +1 or -1");
     }
     bool behind(double coordinate) const { return (coordinate - at) * inward < 0.0; }
+    // Whether a point is within `reach` of the plane (on either side).
+    template <class V>
+    bool within(const V& x, double reach) const { return std::abs(x[static_cast<std::size_t>(axis)] - at) < reach; }
 };
 
 template <int Dim>
@@ -131,7 +134,7 @@ void for_each_mirrored_neighbour(const ParticleStore<Dim>& P, const typename Cel
     const WallPlane* near[max_near];
     int nw = 0;
     for (const WallPlane& w : walls)
-        if (nw < max_near && std::abs(xi[static_cast<std::size_t>(w.axis)] - w.at) < R) near[nw++] = &w;
+        if (nw < max_near && w.within(xi, R)) near[nw++] = &w;
     const auto behind_a_near_wall = [&](const V& x) {
         for (int q = 0; q < nw; ++q)
             if (near[q]->behind(x[static_cast<std::size_t>(near[q]->axis)])) return true;
@@ -176,7 +179,7 @@ void detect_surface_at_tank_walls(ParticleStore<Dim>& P, const CellGrid<Dim>& gr
     const double R2 = grid.radius2(), R = std::sqrt(R2);
     const auto near_a_wall = [&](std::uint32_t i) {
         for (const WallPlane& w : s.walls)
-            if (std::abs(P.x[i][static_cast<std::size_t>(w.axis)] - w.at) < R) return true;
+            if (w.within(P.x[i], R)) return true;
         return false;
     };
     grid.for_each_cell_parallel([&](std::uint32_t cell, std::uint32_t begin, std::uint32_t end) {
@@ -232,7 +235,7 @@ double apply_surface_stress(ParticleStore<Dim>& P, const CellGrid<Dim>& grid, co
                 count(xj);
                 for (const WallPlane& w : s.walls) {
                     const auto k = static_cast<std::size_t>(w.axis);
-                    if (std::abs(xi[k] - w.at) >= 2.0 * s.h || std::abs(unit[k]) > std::sqrt(0.5)) continue;
+                    if (!w.within(xi, 2.0 * s.h) || std::abs(unit[k]) > std::sqrt(0.5)) continue;
                     V image = xj;
                     image[k] = 2.0 * w.at - xj[k];
                     count(image);
